@@ -1,0 +1,63 @@
+#pragma once
+// Conventions shared by every subcommand: global options, progress line, warnings, and
+// how results reach stdout (text or JSON) and the --report file.
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "isochart/io.h"
+#include "isochart/progress.h"
+
+namespace cli {
+
+struct GlobalOptions {
+  int threads = 0;          // 0 = all cores
+  std::uint64_t seed = 1;   // every random choice derives from this
+  bool quiet = false;
+  int verbose = 0;
+  bool json = false;        // print the result as one JSON object
+  std::string report;       // also save the JSON result here
+  bool no_repair = false;   // treat repairable mesh problems as errors
+};
+
+/// Shared state handed to subcommands.
+struct Context {
+  Context();
+  GlobalOptions opts;
+  void warn(const std::string& file, const std::string& message) const;
+  void info(const std::string& message) const;  // only with -v
+  /// A progress callback printing one line on stderr, shown once a run passes one second.
+  isochart::Progress progress() const;
+  /// Clears the progress line (call before printing results).
+  void end_progress() const;
+  /// Loads a mesh with the global repair setting, printing repair warnings.
+  isochart::LoadResult load(const std::string& path) const;
+  /// Prints `text` (or the JSON when --json) on stdout, and writes the --report file.
+  void emit(const nlohmann::json& result, const std::string& text) const;
+
+  struct ProgressState;
+  std::shared_ptr<ProgressState> progress_state;
+};
+
+/// A subcommand: registers its options on `sub` and returns the action to run.
+using Action = std::function<void()>;
+
+void add_info(CLI::App& app, Context& ctx, Action& action);
+void add_stats(CLI::App& app, Context& ctx, Action& action);
+
+/// Throws InputError(file, msg) for an invalid option value (exit code 2).
+[[noreturn]] void bad_option(const std::string& message);
+
+/// Seconds since `t0`.
+inline double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace cli

@@ -1,0 +1,67 @@
+// `isocharts stats FILE`: quality figures of an existing atlas (a mesh with UVs).
+
+#include <cmath>
+#include <sstream>
+
+#include "cli.h"
+#include "isochart/error.h"
+#include "isochart/stretch.h"
+
+namespace cli {
+
+namespace {
+
+struct StatsArgs {
+  std::string input;
+};
+
+// JSON has no infinity: a flipped atlas reports null stretch.
+nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
+
+void run_stats(const Context& ctx, const StatsArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  isochart::LoadResult r = ctx.load(a.input);
+  if (!r.mesh.has_uvs())
+    throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
+  const isochart::AtlasQuality q = isochart::measure_atlas(r.mesh);
+
+  nlohmann::json j;
+  j["file"] = a.input;
+  j["faces"] = r.mesh.num_faces();
+  j["charts"] = q.charts;
+  j["l2_stretch"] = finite_or_null(q.stretch.l2);
+  j["linf_stretch"] = finite_or_null(q.stretch.linf);
+  j["flipped"] = q.stretch.flipped;
+  j["overlapping_pairs"] = q.overlapping_pairs;
+  j["packing_ratio"] = q.packing_ratio;
+  j["seam_length"] = q.seam_length;
+  j["seam_length_relative"] = q.seam_length_relative;
+  j["surface_area"] = q.stretch.area_3d;
+  j["uv_area"] = q.uv_area;
+  j["uv_bbox"] = {q.uv_min.x, q.uv_min.y, q.uv_max.x, q.uv_max.y};
+  j["seconds"] = seconds_since(t0);
+
+  std::ostringstream t;
+  t << a.input << "\n"
+    << "  charts              " << q.charts << "\n"
+    << "  L2 stretch          " << q.stretch.l2 << "\n"
+    << "  Linf stretch        " << q.stretch.linf << "\n"
+    << "  flipped triangles   " << q.stretch.flipped << "\n"
+    << "  overlapping pairs   " << q.overlapping_pairs << "\n"
+    << "  packing ratio       " << q.packing_ratio << "\n"
+    << "  seam length         " << q.seam_length << " (" << q.seam_length_relative
+    << " x sqrt(area))\n";
+  ctx.emit(j, t.str());
+}
+
+}  // namespace
+
+void add_stats(CLI::App& app, Context& ctx, Action& action) {
+  auto args = std::make_shared<StatsArgs>();
+  CLI::App* sub = app.add_subcommand("stats", "Stretch, flips, overlaps, packing and seams of an atlas");
+  sub->add_option("input", args->input, "Mesh with texture coordinates (OBJ vt, PLY/glTF UVs)")->required();
+  sub->footer("Example: isocharts stats ../shared/data/baseline_atlases/bunny_uvatlas.obj");
+  sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_stats(ctx, *args); }; });
+}
+
+}  // namespace cli

@@ -1,0 +1,70 @@
+// isocharts: the command-line front end. Exit codes: 0 ok, 1 internal failure, 2 bad input.
+
+#include <iostream>
+#include <memory>
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include "cli.h"
+#include "isochart/error.h"
+
+int main(int argc, char** argv) {
+  cli::Context ctx;
+
+  CLI::App app{"isocharts: stretch-bounded texture atlases (Iso-charts), multi-chart geometry "
+               "images and surface texture synthesis"};
+  app.set_version_flag("--version", std::string("isocharts ") + ISOCHARTS_VERSION);
+  app.require_subcommand(1);
+  app.fallthrough();  // global options may follow the subcommand
+  app.add_option("--threads", ctx.opts.threads, "Worker threads (0 = all cores)")
+      ->check(CLI::Range(0, 1024));
+  app.add_option("--seed", ctx.opts.seed, "Seed for every random choice (results depend only on it)");
+  app.add_flag("-q,--quiet", ctx.opts.quiet, "No warnings or progress on stderr");
+  app.add_flag("-v,--verbose", ctx.opts.verbose, "More detail on stderr");
+  app.add_flag("--json", ctx.opts.json, "Print the result as one JSON object on stdout");
+  app.add_option("--report", ctx.opts.report, "Also save the JSON result to this file");
+  app.add_flag("--no-repair", ctx.opts.no_repair,
+               "Treat repairable mesh problems (non-manifold, degenerate faces, ...) as errors");
+
+  cli::Action action;
+  cli::add_info(app, ctx, action);
+  cli::add_stats(app, ctx, action);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "isocharts: error: " << e.what() << "\n";
+    return 2;
+  }
+
+  const int threads = ctx.opts.threads > 0 ? ctx.opts.threads : tbb::info::default_concurrency();
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+
+  try {
+    action();
+  } catch (const isochart::InputError& e) {
+    ctx.end_progress();
+    std::cerr << "isocharts: error: " << (e.file().empty() ? "" : e.file() + ": ") << e.what() << "\n";
+    return 2;
+  } catch (const isochart::Cancelled&) {
+    ctx.end_progress();
+    std::cerr << "isocharts: error: cancelled\n";
+    return 1;
+  } catch (const std::bad_alloc&) {
+    ctx.end_progress();
+    std::cerr << "isocharts: error: out of memory\n";
+    return 1;
+  } catch (const std::exception& e) {
+    ctx.end_progress();
+    std::cerr << "isocharts: internal error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,74 @@
+#pragma once
+/// Geometric stretch of a parameterization (Sander et al. 2001; Iso-charts §3) and the
+/// other quality figures of an atlas: flips, exact UV overlaps, packing ratio, seams.
+
+#include <vector>
+
+#include "isochart/mesh.h"
+
+namespace isochart {
+
+/// Stretch of one triangle's map from texture space to the surface. Γ and γ are the
+/// largest and smallest singular values of its Jacobian. Not normalized.
+struct TriangleStretch {
+  double gamma_max = 0;  ///< Γ
+  double gamma_min = 0;  ///< γ
+  double l2 = 0;         ///< sqrt((Γ² + γ²) / 2); +inf when flipped or degenerate
+  double linf = 0;       ///< max(Γ, 1/γ); +inf when flipped or degenerate
+  bool flipped = false;  ///< UV area ≤ 0 (clockwise or degenerate in texture space)
+};
+
+/// \param q 3D corners, \param p texture corners (counter-clockwise for a valid map).
+TriangleStretch triangle_stretch(const Vec3d q[3], const Vec2d p[3]);
+
+/// Whole-parameterization stretch, normalized so that 1.0 is ideal: texture coordinates are
+/// scaled so the total texture area equals the total surface area before Γ, γ are taken.
+/// L2 = sqrt(Σ A3D·(Γ²+γ²)/2 / Σ A3D); Linf = max over triangles of max(Γ, 1/γ).
+/// Zero-area 3D triangles are skipped. Any flipped triangle makes both infinite.
+struct StretchStats {
+  double l2 = 0;
+  double linf = 0;
+  int flipped = 0;        ///< triangles with UV area ≤ 0
+  double area_3d = 0;     ///< total surface area
+  double area_uv = 0;     ///< total |UV area|
+  int worst_face = -1;    ///< face reaching linf
+};
+
+/// Per-corner UVs: uv(f, k) is the texture coordinate of corner k of face f.
+/// `faces` selects the faces to measure (all when empty).
+StretchStats measure_stretch(const Mesh& mesh, const std::vector<int>& faces = {});
+
+/// Same with per-vertex UVs (one UV per mesh vertex, as for a single chart).
+StretchStats measure_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
+                             const std::vector<Vec2d>& uv);
+
+/// Per-face normalized stretch values (l2, linf) with the same normalization as
+/// measure_stretch over the whole mesh.
+std::vector<TriangleStretch> per_face_stretch(const Mesh& mesh);
+
+/// Pairs of UV triangles whose interiors overlap, found with exact orientation predicates
+/// (triangles that only touch along an edge or at a point do not count). Flipped or
+/// degenerate UV triangles are reported by measure_stretch, not here, unless they overlap
+/// another triangle's interior. Returns at most `max_pairs` pairs (all when 0).
+std::vector<std::pair<int, int>> overlapping_uv_pairs(const std::vector<std::array<Vec2d, 3>>& tris,
+                                                      std::size_t max_pairs = 0);
+std::vector<std::pair<int, int>> overlapping_uv_pairs(const Mesh& mesh, std::size_t max_pairs = 0);
+
+/// Charts of a mesh with per-corner UVs: faces connected through edges whose two sides
+/// share texture coordinates. Returns the chart id per face; `num_charts` receives the count.
+std::vector<int> uv_charts(const Mesh& mesh, int& num_charts);
+
+/// All the figures `isocharts stats` prints.
+struct AtlasQuality {
+  int charts = 0;
+  StretchStats stretch;
+  long long overlapping_pairs = 0;
+  double packing_ratio = 0;   ///< total UV area / area of the UV bounding box
+  double uv_area = 0;
+  double seam_length = 0;     ///< 3D length of interior mesh edges cut by the atlas
+  double seam_length_relative = 0;  ///< seam_length / sqrt(surface area)
+  Vec2d uv_min, uv_max;       ///< UV bounding box
+};
+AtlasQuality measure_atlas(const Mesh& mesh);
+
+}  // namespace isochart

@@ -1,0 +1,45 @@
+#pragma once
+/// Mesh validation and repair: what the file says (RawMesh) → a clean triangle mesh.
+
+#include <string>
+#include <vector>
+
+#include "isochart/mesh.h"
+
+namespace isochart {
+
+/// A mesh as read from a file, before validation: polygons of any size.
+struct RawMesh {
+  std::string source;                     ///< file name, for messages
+  std::vector<Vec3d> positions;
+  std::vector<std::vector<int>> polygons; ///< vertex indices per face (0-based, unchecked)
+  std::vector<Vec3d> normals;             ///< per-vertex, or empty
+  std::vector<Vec3d> colors;              ///< per-vertex RGB in [0,1], or empty
+  std::vector<Vec2d> uvs;
+  std::vector<std::vector<int>> polygon_uvs; ///< per polygon, same size as polygons[i], or empty
+  std::vector<int> polygon_groups;        ///< per polygon group id, or empty
+};
+
+/// What validation found in the input and what it changed.
+struct ValidationReport {
+  int input_vertices = 0;        ///< vertices in the file
+  int input_faces = 0;           ///< faces in the file (polygons count once)
+  int polygons = 0;              ///< faces with more than 3 corners (triangulated)
+  int degenerate_faces = 0;      ///< zero-area faces or faces repeating a vertex (removed)
+  int duplicate_faces = 0;       ///< faces with the same vertex set as an earlier one (removed)
+  int unreferenced_vertices = 0; ///< vertices used by no face (dropped)
+  int nonmanifold_edges = 0;     ///< edges with more than two faces (split)
+  int nonmanifold_vertices = 0;  ///< vertices joining several fans (split)
+  int reoriented_faces = 0;      ///< faces flipped to make orientation consistent
+  int components = 0;            ///< edge-connected components after repair
+  std::vector<std::string> warnings;  ///< one line per repair, for the CLI to print
+};
+
+/// Validates and repairs a raw mesh into a clean, consistently oriented, edge- and
+/// vertex-manifold triangle mesh. With `repair` false, any problem that would need a
+/// repair throws instead. Attributes (normals, colours, UVs, groups) are carried along.
+/// \throw InputError (file = raw.source) for unrecoverable problems: empty mesh, NaN/Inf
+///        coordinates, indices out of range, or a problem when repair is off.
+Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report);
+
+}  // namespace isochart

@@ -1,0 +1,309 @@
+#include "isochart/stretch.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/box_intersection_d.h>
+
+#include "isochart/error.h"
+
+namespace isochart {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Γ² and γ² from the metric tensor [a b; b c] of the texture → surface map.
+void metric_tensor(const Vec3d q[3], const Vec2d p[3], double& a, double& b, double& c, double& area2) {
+  const double s1 = p[0].x, t1 = p[0].y, s2 = p[1].x, t2 = p[1].y, s3 = p[2].x, t3 = p[2].y;
+  area2 = (s2 - s1) * (t3 - t1) - (s3 - s1) * (t2 - t1);  // twice the signed UV area
+  if (!(area2 > 0)) {
+    a = b = c = 0;
+    return;
+  }
+  const Vec3d Ss = (q[0] * (t2 - t3) + q[1] * (t3 - t1) + q[2] * (t1 - t2)) / area2;
+  const Vec3d St = (q[0] * (s3 - s2) + q[1] * (s1 - s3) + q[2] * (s2 - s1)) / area2;
+  a = dot(Ss, Ss);
+  b = dot(Ss, St);
+  c = dot(St, St);
+}
+
+// Accumulates stretch over triangles given an accessor for corners.
+template <class Corners>
+StretchStats accumulate(int nfaces, Corners corners) {
+  StretchStats st;
+  // First pass: areas for the normalization.
+  double sum_l2 = 0;
+  double max_g2 = 0, max_inv = 0;
+  for (int i = 0; i < nfaces; ++i) {
+    Vec3d q[3];
+    Vec2d p[3];
+    corners(i, q, p);
+    const double a3 = triangle_area(q[0], q[1], q[2]);
+    const double a2 = signed_area(p[0], p[1], p[2]);
+    if (!(a3 > 0)) continue;  // zero-area surface triangles carry no stretch
+    st.area_3d += a3;
+    st.area_uv += std::abs(a2);
+    double a, b, c, area2;
+    metric_tensor(q, p, a, b, c, area2);
+    if (!(area2 > 0)) {
+      ++st.flipped;
+      if (st.worst_face < 0 || max_inv < kInf) st.worst_face = i;
+      max_inv = kInf;
+      continue;
+    }
+    sum_l2 += a3 * 0.5 * (a + c);
+    const double disc = std::sqrt((a - c) * (a - c) + 4 * b * b);
+    const double g2max = 0.5 * (a + c + disc);
+    const double g2min = std::max(0.5 * (a + c - disc), 0.0);
+    const double inv = g2min > 0 ? 1.0 / g2min : kInf;
+    // Compare candidates after normalization below; keep both maxima separately.
+    if (g2max > max_g2) max_g2 = g2max;
+    if (inv > max_inv) {
+      max_inv = inv;
+      st.worst_face = i;
+    }
+  }
+  if (st.area_3d <= 0) return st;
+  if (st.flipped > 0 || st.area_uv <= 0) {
+    st.l2 = st.linf = kInf;
+    return st;
+  }
+  // Scaling texture coordinates by s = sqrt(A3D / AUV) divides the Jacobian by s.
+  const double n2 = st.area_uv / st.area_3d;  // 1 / s²
+  st.l2 = std::sqrt(sum_l2 / st.area_3d * n2);
+  const double linf_stretch = std::sqrt(max_g2 * n2);
+  const double linf_shrink = std::sqrt(max_inv / n2);
+  st.linf = std::max(linf_stretch, linf_shrink);
+  if (linf_stretch >= linf_shrink) {
+    // Find the face reaching the stretch maximum for reporting.
+    for (int i = 0; i < nfaces; ++i) {
+      Vec3d q[3];
+      Vec2d p[3];
+      corners(i, q, p);
+      if (!(triangle_area(q[0], q[1], q[2]) > 0)) continue;
+      double a, b, c, area2;
+      metric_tensor(q, p, a, b, c, area2);
+      const double disc = std::sqrt((a - c) * (a - c) + 4 * b * b);
+      if (0.5 * (a + c + disc) == max_g2) {
+        st.worst_face = i;
+        break;
+      }
+    }
+  }
+  return st;
+}
+
+}  // namespace
+
+TriangleStretch triangle_stretch(const Vec3d q[3], const Vec2d p[3]) {
+  TriangleStretch t;
+  double a, b, c, area2;
+  metric_tensor(q, p, a, b, c, area2);
+  if (!(area2 > 0)) {
+    t.flipped = true;
+    t.l2 = t.linf = kInf;
+    return t;
+  }
+  const double disc = std::sqrt((a - c) * (a - c) + 4 * b * b);
+  t.gamma_max = std::sqrt(0.5 * (a + c + disc));
+  t.gamma_min = std::sqrt(std::max(0.5 * (a + c - disc), 0.0));
+  t.l2 = std::sqrt(0.5 * (a + c));
+  t.linf = std::max(t.gamma_max, t.gamma_min > 0 ? 1.0 / t.gamma_min : kInf);
+  return t;
+}
+
+StretchStats measure_stretch(const Mesh& mesh, const std::vector<int>& faces) {
+  if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates");
+  const int n = faces.empty() ? mesh.num_faces() : static_cast<int>(faces.size());
+  StretchStats st = accumulate(n, [&](int i, Vec3d* q, Vec2d* p) {
+    const int f = faces.empty() ? i : faces[i];
+    for (int k = 0; k < 3; ++k) {
+      q[k] = mesh.positions[mesh.faces[f][k]];
+      p[k] = mesh.uvs[mesh.face_uvs[f][k]];
+    }
+  });
+  if (!faces.empty() && st.worst_face >= 0) st.worst_face = faces[st.worst_face];
+  return st;
+}
+
+StretchStats measure_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
+                             const std::vector<Vec2d>& uv) {
+  return accumulate(static_cast<int>(faces.size()), [&](int f, Vec3d* q, Vec2d* p) {
+    for (int k = 0; k < 3; ++k) {
+      q[k] = positions[faces[f][k]];
+      p[k] = uv[faces[f][k]];
+    }
+  });
+}
+
+std::vector<TriangleStretch> per_face_stretch(const Mesh& mesh) {
+  const StretchStats st = measure_stretch(mesh);
+  std::vector<TriangleStretch> out(mesh.faces.size());
+  const double s = st.area_uv > 0 ? std::sqrt(st.area_3d / st.area_uv) : 1.0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    Vec3d q[3];
+    Vec2d p[3];
+    for (int k = 0; k < 3; ++k) {
+      q[k] = mesh.positions[mesh.faces[f][k]];
+      p[k] = mesh.uvs[mesh.face_uvs[f][k]] * s;
+    }
+    out[f] = triangle_stretch(q, p);
+  }
+  return out;
+}
+
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using P2 = K::Point_2;
+
+// Interiors of two non-degenerate triangles are disjoint iff one of the six edge lines
+// separates them (separating axis theorem for convex polygons), tested with exact predicates.
+bool separated_by_edge_of(const P2 a[3], const P2 b[3]) {
+  // Orient a counter-clockwise: inside is the left side of each edge.
+  const bool ccw = CGAL::orientation(a[0], a[1], a[2]) == CGAL::LEFT_TURN;
+  for (int k = 0; k < 3; ++k) {
+    const P2& u = a[k];
+    const P2& v = a[(k + 1) % 3];
+    bool all_outside = true;
+    for (int j = 0; j < 3 && all_outside; ++j) {
+      const CGAL::Orientation o = CGAL::orientation(u, v, b[j]);
+      all_outside = ccw ? (o != CGAL::LEFT_TURN) : (o != CGAL::RIGHT_TURN);
+    }
+    if (all_outside) return true;
+  }
+  return false;
+}
+
+bool interiors_overlap(const std::array<Vec2d, 3>& x, const std::array<Vec2d, 3>& y) {
+  const P2 a[3] = {{x[0].x, x[0].y}, {x[1].x, x[1].y}, {x[2].x, x[2].y}};
+  const P2 b[3] = {{y[0].x, y[0].y}, {y[1].x, y[1].y}, {y[2].x, y[2].y}};
+  if (CGAL::collinear(a[0], a[1], a[2]) || CGAL::collinear(b[0], b[1], b[2])) return false;
+  return !separated_by_edge_of(a, b) && !separated_by_edge_of(b, a);
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> overlapping_uv_pairs(const std::vector<std::array<Vec2d, 3>>& tris,
+                                                      std::size_t max_pairs) {
+  using Box = CGAL::Box_intersection_d::Box_with_handle_d<double, 2, std::size_t,
+                                                          CGAL::Box_intersection_d::ID_EXPLICIT>;
+  std::vector<Box> boxes;
+  boxes.reserve(tris.size());
+  for (std::size_t i = 0; i < tris.size(); ++i) {
+    const auto& t = tris[i];
+    double lo[2], hi[2];
+    for (int d = 0; d < 2; ++d) {
+      lo[d] = std::min({t[0][d], t[1][d], t[2][d]});
+      hi[d] = std::max({t[0][d], t[1][d], t[2][d]});
+    }
+    if (!(std::isfinite(lo[0]) && std::isfinite(lo[1]) && std::isfinite(hi[0]) && std::isfinite(hi[1])))
+      continue;
+    boxes.emplace_back(CGAL::Bbox_2(lo[0], lo[1], hi[0], hi[1]), i);
+  }
+  std::vector<std::pair<int, int>> pairs;
+  // Boxes are closed, so triangles touching at a point are candidates and the exact test
+  // decides. Open boxes would miss nothing since overlapping interiors have overlapping
+  // open boxes, and they save work on meshes whose triangles share corners.
+  auto report_pair = [&](const Box& a, const Box& b) {
+    if (max_pairs && pairs.size() >= max_pairs) return;
+    const int i = static_cast<int>(a.handle()), j = static_cast<int>(b.handle());
+    if (interiors_overlap(tris[i], tris[j])) pairs.emplace_back(std::min(i, j), std::max(i, j));
+  };
+  CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), report_pair, std::ptrdiff_t(10),
+                                CGAL::Box_intersection_d::HALF_OPEN);
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+std::vector<std::pair<int, int>> overlapping_uv_pairs(const Mesh& mesh, std::size_t max_pairs) {
+  std::vector<std::array<Vec2d, 3>> tris(mesh.faces.size());
+  for (int f = 0; f < mesh.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) tris[f][k] = mesh.uvs[mesh.face_uvs[f][k]];
+  return overlapping_uv_pairs(tris, max_pairs);
+}
+
+namespace {
+
+// True when the two faces of interior edge e use the same texture coordinates at both ends.
+bool uv_continuous(const Mesh& mesh, const Topology& topo, int e) {
+  const IndexRange ef = topo.edge_faces(e);
+  if (ef.size() != 2) return false;
+  auto uv_at = [&](int f, int v) {
+    for (int k = 0; k < 3; ++k)
+      if (mesh.faces[f][k] == v) return mesh.uvs[mesh.face_uvs[f][k]];
+    return Vec2d{};
+  };
+  const auto& ed = topo.edge(e);
+  return uv_at(ef[0], ed.v0) == uv_at(ef[1], ed.v0) && uv_at(ef[0], ed.v1) == uv_at(ef[1], ed.v1);
+}
+
+std::vector<int> uv_charts(const Mesh& mesh, const Topology& topo, int& num_charts) {
+  const int nf = mesh.num_faces();
+  std::vector<int> parent(nf);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (int e = 0; e < topo.num_edges(); ++e) {
+    if (!uv_continuous(mesh, topo, e)) continue;
+    const int a = find(topo.edge_faces(e)[0]), b = find(topo.edge_faces(e)[1]);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+  std::vector<int> id(nf, -1), chart(nf);
+  num_charts = 0;
+  for (int f = 0; f < nf; ++f) {
+    const int r = find(f);
+    if (id[r] < 0) id[r] = num_charts++;
+    chart[f] = id[r];
+  }
+  return chart;
+}
+
+}  // namespace
+
+std::vector<int> uv_charts(const Mesh& mesh, int& num_charts) {
+  if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates");
+  return uv_charts(mesh, Topology(mesh), num_charts);
+}
+
+AtlasQuality measure_atlas(const Mesh& mesh) {
+  if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates (vt)");
+  AtlasQuality q;
+  const Topology topo(mesh);
+  uv_charts(mesh, topo, q.charts);
+  q.stretch = measure_stretch(mesh);
+  q.overlapping_pairs = static_cast<long long>(overlapping_uv_pairs(mesh).size());
+  q.uv_area = 0;
+  bool first = true;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    Vec2d p[3];
+    for (int k = 0; k < 3; ++k) {
+      p[k] = mesh.uvs[mesh.face_uvs[f][k]];
+      if (first) {
+        q.uv_min = q.uv_max = p[k];
+        first = false;
+      }
+      q.uv_min = {std::min(q.uv_min.x, p[k].x), std::min(q.uv_min.y, p[k].y)};
+      q.uv_max = {std::max(q.uv_max.x, p[k].x), std::max(q.uv_max.y, p[k].y)};
+    }
+    q.uv_area += std::abs(signed_area(p[0], p[1], p[2]));
+  }
+  const double box = (q.uv_max.x - q.uv_min.x) * (q.uv_max.y - q.uv_min.y);
+  q.packing_ratio = box > 0 ? q.uv_area / box : 0;
+  for (int e = 0; e < topo.num_edges(); ++e) {
+    // Mesh boundary edges are not seams; interior edges are when the UVs differ across them.
+    if (topo.edge_faces(e).size() < 2 || uv_continuous(mesh, topo, e)) continue;
+    q.seam_length += norm(mesh.positions[topo.edge(e).v0] - mesh.positions[topo.edge(e).v1]);
+  }
+  const double area = surface_area(mesh);
+  q.seam_length_relative = area > 0 ? q.seam_length / std::sqrt(area) : 0;
+  return q;
+}
+
+}  // namespace isochart
