@@ -56,10 +56,4 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
 /// Writes `data` to `path` atomically (temporary file + rename). Used for every output.
 void write_file_atomic(const std::string& path, const std::string& data);
 
-/// Writes an image (PNG/JPG/EXR by extension, through OpenImageIO) atomically.
-/// `pixels` is height × width × channels, row-major, top row first, values in [0, 1] for
-/// 8-bit formats (clamped), written as-is for float formats.
-void write_image_atomic(const std::string& path, int width, int height, int channels,
-                        const std::vector<float>& pixels);
-
 }  // namespace isochart
