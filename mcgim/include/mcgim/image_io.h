@@ -1,0 +1,20 @@
+#pragma once
+/// Writing geometry images: float EXR with every sample attribute, PNG previews.
+
+#include <string>
+
+#include "mcgim/geometry_image.h"
+
+namespace mcgim {
+
+/// Writes a float OpenEXR image of W×H pixels with channels R, G, B (position, model units),
+/// N.X, N.Y, N.Z (normal), `defined` (1 or 0), `chart` and `group` (ids, −1 when undefined).
+/// Row 0 of the file is the image's top (sample row H − 1). Written atomically.
+/// \throw isochart::Error when the file cannot be written.
+void write_exr(const GeometryImage& image, const std::string& path);
+
+/// Writes an 8-bit RGB preview (PNG, or any format OpenImageIO writes, by extension): normals
+/// mapped to colours (n + 1)/2, undefined samples black. Same row order as write_exr.
+void write_normal_preview(const GeometryImage& image, const std::string& path);
+
+}  // namespace mcgim

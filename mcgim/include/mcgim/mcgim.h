@@ -1,0 +1,110 @@
+#pragma once
+/// Building multi-chart geometry images from an atlas (Sander et al. 2003; Iso-charts §8, §9.2):
+/// packing at the image's resolution, sampling, zippering, reconstruction, sample optimization,
+/// and pyramids of several resolutions linked by normal shooting.
+///
+/// The atlas is an isochart::Mesh with per-corner texture coordinates (`uvs`, `face_uvs`); its
+/// charts are the edge-connected pieces of `face_groups` (or of isochart::uv_charts when there
+/// are no groups), each piece with continuous texture coordinates. Every chart must be a
+/// topological disk with a non-degenerate layout.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "isochart/mesh.h"
+#include "isochart/progress.h"
+#include "mcgim/correspondence.h"
+#include "mcgim/geometry_image.h"
+
+namespace mcgim {
+
+struct LevelOptions {
+  int width = 256;   ///< samples per row (2 .. 16384)
+  int height = 256;  ///< rows (2 .. 16384)
+  /// Re-pack the atlas's charts for this resolution with isochart::pack_charts (every chart
+  /// at the same texel density, at least `gutter` empty texels between charts). When false,
+  /// the atlas's own layout in [0,1]² is used as is and must keep charts ≥ 1 texel apart.
+  bool repack = true;
+  int gutter = 1;  ///< texels between charts when re-packing (≥ 1)
+  /// Move the samples (welded groups together) towards the original surface after
+  /// zippering: a least-squares fit of the reconstructed surface to points of the original
+  /// surface at their texture positions, with a pull towards the sampled positions.
+  bool optimize = true;
+  int optimize_iterations = 2;  ///< fit passes (each re-picks the diagonals and refits)
+  /// Weight of the pull towards the sampled positions, relative to the fit, per unit of
+  /// texel area. Small values fit harder; it keeps samples without data in place.
+  double optimize_regularization = 0.05;
+};
+
+/// What one level measured. Seconds are wall time per stage.
+struct LevelStats {
+  int width = 0, height = 0;
+  int charts = 0;
+  int empty_charts = 0;       ///< charts left without a sample at this resolution (contracted)
+  long long defined_samples = 0;
+  long long removed_samples = 0;  ///< covered samples dropped to make each chart a disk
+  /// Samples added to charts too small to cover a triangle of sample centres: one 2×2 block at
+  /// the free place nearest to the chart, each sample at the chart's closest point.
+  long long forced_samples = 0;
+  long long unique_vertices = 0;  ///< vertices of the remesh (after welding)
+  long long triangles = 0;
+  long long degenerate_triangles = 0;
+  long long collapsed_triangles = 0;
+  int cut_nodes = 0;          ///< nodes of the cut graph (artificial ones included)
+  int cut_paths = 0;          ///< cut paths zippered (two-sided)
+  TopologyCheck topology;     ///< of the remesh
+  int input_euler_characteristic = 0;
+  int input_boundary_loops = 0;
+  double texel_size = 0;      ///< sqrt(surface area / defined samples), model units
+  double seconds_packing = 0, seconds_sampling = 0, seconds_zippering = 0,
+         seconds_reconstruction = 0, seconds_optimization = 0, seconds_correspondence = 0;
+};
+
+/// One level: the image, its remesh, and (in a pyramid, for all but the coarsest level) the
+/// normal-shooting correspondence of each of its samples on the next coarser level.
+struct Level {
+  GeometryImage image;
+  Remesh remesh;
+  LevelStats stats;
+  std::vector<Correspondence> coarser;  ///< W·H, empty for the coarsest level
+};
+
+/// Builds one MCGIM from an atlas: pack (or keep) the layout at W×H, rasterize each chart (a
+/// sample is defined iff its centre lies in one of the chart's triangles, a centre on a shared
+/// edge or vertex belonging to exactly one of them), drop samples so that each chart's samples
+/// form a disk, zipper, reconstruct, optimize.
+/// \throw isochart::InputError for an atlas without texture coordinates, a chart that is not a
+///        disk or is degenerate, a non-manifold mesh, or (with repack off) charts closer than a
+///        texel or outside [0,1]²; isochart::Error when the packer cannot fit the charts.
+/// \throw isochart::Cancelled when `progress` returns false.
+Level build_level(const isochart::Mesh& atlas, const LevelOptions& options = {},
+                  const isochart::Progress& progress = {});
+
+struct PyramidOptions {
+  /// Resolutions, any order; the levels are returned finest first. Each is packed,
+  /// sampled and zippered on its own.
+  std::vector<std::array<int, 2>> sizes = {{256, 256}, {128, 128}, {64, 64}, {32, 32}};
+  LevelOptions level;  ///< width and height are taken from `sizes`
+  ShootOptions shoot;
+};
+
+/// Builds every level and links each level's samples to the next coarser level by normal
+/// shooting (Iso-charts §8).
+std::vector<Level> build_pyramid(const isochart::Mesh& atlas, const PyramidOptions& options = {},
+                                 const isochart::Progress& progress = {});
+
+/// Result of the resolution search for a sample budget.
+struct ResolutionChoice {
+  int width = 0, height = 0;
+  long long defined_samples = 0;  ///< samples covered at that resolution (before disk cleanup)
+  int trials = 0;
+};
+
+/// Searches the square resolution whose packed atlas covers about `target_samples` samples.
+ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target_samples,
+                                   const LevelOptions& options = {},
+                                   const isochart::Progress& progress = {});
+
+}  // namespace mcgim

@@ -1,0 +1,107 @@
+#include "mcgim/correspondence.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+
+#include "aabb.h"
+#include "isochart/error.h"
+
+namespace mcgim {
+
+namespace {
+
+using isochart::Vec2d;
+using isochart::Vec3d;
+
+// Barycentric coordinates of the point of the triangle (a, b, c) nearest to p (Ericson 3.4).
+Vec3d barycentric_3d(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d v0 = b - a, v1 = c - a, v2 = p - a;
+  const double d00 = dot(v0, v0), d01 = dot(v0, v1), d11 = dot(v1, v1);
+  const double d20 = dot(v2, v0), d21 = dot(v2, v1);
+  const double den = d00 * d11 - d01 * d01;
+  if (!(den > 0)) return {1.0 / 3, 1.0 / 3, 1.0 / 3};
+  double v = (d11 * d20 - d01 * d21) / den, w = (d00 * d21 - d01 * d20) / den;
+  double u = 1 - v - w;
+  u = std::max(u, 0.0);
+  v = std::max(v, 0.0);
+  w = std::max(w, 0.0);
+  const double s = u + v + w;
+  return {u / s, v / s, w / s};
+}
+
+}  // namespace
+
+std::vector<Correspondence> shoot_normals(const GeometryImage& fine, const GeometryImage& coarse_image,
+                                          const Remesh& coarse, const ShootOptions& o,
+                                          const isochart::Progress& progress) {
+  const detail::TriangleSet ts(coarse.mesh);
+  if (ts.empty()) throw isochart::InputError("", "the coarser remesh has no face of positive area");
+  const int defined = coarse_image.defined_samples();
+  const double texel = std::sqrt(isochart::surface_area(coarse.mesh) / std::max(defined, 1));
+  const double reach = o.max_distance_texels * texel;
+  const std::vector<Vec3d> fn = isochart::face_normals(coarse.mesh);
+  const int W = coarse_image.width;
+  const std::size_t N = fine.chart.size();
+  std::vector<Correspondence> out(N);
+  const std::size_t chunk = 4096;
+  const std::size_t chunks = (N + chunk - 1) / chunk;
+  std::atomic<std::size_t> done{0};
+  isochart::report(progress, isochart::Stage::Correspondence, 0.0);
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t ci) {
+    const std::size_t end = std::min(N, (ci + 1) * chunk);
+    for (std::size_t i = ci * chunk; i < end; ++i) {
+      if (!fine.defined(static_cast<int>(i))) continue;
+      const Vec3d p = fine.positions[i];
+      const Vec3d n = fine.normals[i];
+      Correspondence& c = out[i];
+      double best = std::numeric_limits<double>::infinity();
+      if (squared_norm(n) > 0) {
+        for (double sign : {1.0, -1.0}) {
+          const detail::Kernel::Ray_3 ray(detail::to_point(p),
+                                          detail::Kernel::Vector_3(sign * n.x, sign * n.y, sign * n.z));
+          const auto hit = ts.tree.first_intersection(ray);
+          if (!hit) continue;
+          Vec3d q;
+          if (const auto* pt = boost::get<detail::Point3>(&hit->first)) {
+            q = detail::to_vec(*pt);
+          } else if (const auto* sg = boost::get<detail::Kernel::Segment_3>(&hit->first)) {
+            const Vec3d s0 = detail::to_vec(sg->source()), s1 = detail::to_vec(sg->target());
+            q = squared_norm(s0 - p) <= squared_norm(s1 - p) ? s0 : s1;
+          } else {
+            continue;
+          }
+          const int f = ts.face_of(hit->second);
+          const double d = norm(q - p);
+          if (d > reach || d >= best || dot(fn[f], n) <= o.min_cosine) continue;
+          best = d;
+          c.face = f;
+          c.point = q;
+          c.hit = true;
+        }
+      }
+      if (!c.hit) {
+        const auto cp = ts.tree.closest_point_and_primitive(detail::to_point(p));
+        c.point = detail::to_vec(cp.first);
+        c.face = ts.face_of(cp.second);
+      }
+      c.distance = norm(c.point - p);
+      const auto& fv = coarse.mesh.faces[c.face];
+      c.barycentric = barycentric_3d(c.point, coarse.mesh.positions[fv[0]], coarse.mesh.positions[fv[1]],
+                                     coarse.mesh.positions[fv[2]]);
+      const auto& s = coarse.face_samples[c.face];
+      const double b[3] = {c.barycentric.x, c.barycentric.y, c.barycentric.z};
+      c.image_xy = {};
+      for (int k = 0; k < 3; ++k) c.image_xy += Vec2d{s[k] % W + 0.5, s[k] / W + 0.5} * b[k];
+      c.chart = coarse_image.chart[s[0]];
+    }
+    const std::size_t k = ++done;
+    isochart::report(progress, isochart::Stage::Correspondence, static_cast<double>(k) / chunks);
+  });
+  return out;
+}
+
+}  // namespace mcgim

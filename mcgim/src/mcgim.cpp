@@ -1,0 +1,155 @@
+#include "mcgim/mcgim.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "charts.h"
+#include "isochart/error.h"
+#include "optimize_samples.h"
+#include "sampling.h"
+#include "zipper.h"
+
+namespace mcgim {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+void check_options(const LevelOptions& o) {
+  auto bad = [](const std::string& msg) { throw isochart::InputError("", msg); };
+  if (o.width < 2 || o.width > 16384 || o.height < 2 || o.height > 16384)
+    bad("geometry image size " + std::to_string(o.width) + "x" + std::to_string(o.height) +
+        " is outside 2..16384");
+  if (o.gutter < 1) bad("the gutter must be at least 1 texel");
+  if (o.optimize_iterations < 0) bad("optimize_iterations must be >= 0");
+  if (!(o.optimize_regularization > 0)) bad("optimize_regularization must be > 0");
+}
+
+Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const isochart::Progress& progress) {
+  Level lv;
+  LevelStats& st = lv.stats;
+  st.width = o.width;
+  st.height = o.height;
+  st.charts = static_cast<int>(a.charts.size());
+  st.cut_nodes = a.num_nodes;
+  st.input_euler_characteristic = a.input_euler;
+  st.input_boundary_loops = a.input_boundary_loops;
+
+  const detail::Placement pl = detail::place_charts(a, o, progress);
+  st.seconds_packing = pl.seconds;
+
+  auto t0 = Clock::now();
+  detail::Sampling sm = detail::sample_charts(a, pl, !o.repack, progress);
+  st.seconds_sampling = since(t0);
+
+  t0 = Clock::now();
+  const detail::ZipperStats zs = detail::zipper(a, pl, sm, progress);
+  st.seconds_zippering = since(t0);
+  st.cut_paths = zs.cut_paths;
+  st.empty_charts = zs.empty_charts;
+  st.removed_samples = sm.removed;
+  st.forced_samples = sm.forced;
+
+  lv.image = std::move(sm.image);
+  t0 = Clock::now();
+  lv.remesh = reconstruct(lv.image);
+  st.seconds_reconstruction = since(t0);
+
+  if (o.optimize && o.optimize_iterations > 0) {
+    t0 = Clock::now();
+    detail::optimize_samples(a, pl, sm.param, o, lv.image, lv.remesh, progress);
+    st.seconds_optimization = since(t0);
+  }
+  st.defined_samples = lv.image.defined_samples();
+  st.unique_vertices = lv.remesh.mesh.num_vertices();
+  st.triangles = lv.remesh.mesh.num_faces();
+  st.degenerate_triangles = lv.remesh.degenerate_faces;
+  st.collapsed_triangles = lv.remesh.collapsed_faces;
+  st.topology = check_topology(lv.remesh.mesh);
+  st.texel_size = st.defined_samples > 0 ? std::sqrt(a.surface_area / st.defined_samples) : 0.0;
+  return lv;
+}
+
+}  // namespace
+
+Level build_level(const isochart::Mesh& atlas, const LevelOptions& options, const isochart::Progress& progress) {
+  check_options(options);
+  const detail::AtlasCharts a = detail::prepare_atlas(atlas);
+  return build_prepared(a, options, progress);
+}
+
+std::vector<Level> build_pyramid(const isochart::Mesh& atlas, const PyramidOptions& options,
+                                 const isochart::Progress& progress) {
+  if (options.sizes.empty()) throw isochart::InputError("", "a pyramid needs at least one level");
+  std::vector<std::array<int, 2>> sizes = options.sizes;
+  // Finest first: by sample count, descending (stable for equal counts).
+  std::stable_sort(sizes.begin(), sizes.end(), [](const auto& x, const auto& y) {
+    return static_cast<long long>(x[0]) * x[1] > static_cast<long long>(y[0]) * y[1];
+  });
+  LevelOptions o = options.level;
+  for (const auto& s : sizes) {
+    o.width = s[0];
+    o.height = s[1];
+    check_options(o);
+  }
+  const detail::AtlasCharts a = detail::prepare_atlas(atlas);
+  std::vector<Level> levels;
+  for (const auto& s : sizes) {
+    o.width = s[0];
+    o.height = s[1];
+    levels.push_back(build_prepared(a, o, progress));
+  }
+  for (std::size_t l = 0; l + 1 < levels.size(); ++l) {
+    const auto t0 = Clock::now();
+    levels[l].coarser = shoot_normals(levels[l].image, levels[l + 1].image, levels[l + 1].remesh,
+                                      options.shoot, progress);
+    levels[l].stats.seconds_correspondence = since(t0);
+  }
+  return levels;
+}
+
+ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target, const LevelOptions& options,
+                                   const isochart::Progress& progress) {
+  if (target < 16) throw isochart::InputError("", "the sample budget must be at least 16");
+  const detail::AtlasCharts a = detail::prepare_atlas(atlas);
+  LevelOptions o = options;
+  ResolutionChoice best;
+  auto trial = [&](int res) {
+    o.width = o.height = res;
+    check_options(o);
+    const detail::Placement pl = detail::place_charts(a, o, progress);
+    const long long n = detail::count_covered(a, pl);
+    ++best.trials;
+    if (best.width == 0 || std::llabs(n - target) < std::llabs(best.defined_samples - target) ||
+        (std::llabs(n - target) == std::llabs(best.defined_samples - target) && res < best.width)) {
+      best.width = best.height = res;
+      best.defined_samples = n;
+    }
+    return n;
+  };
+  // Coverage grows about with the square of the resolution: iterate on that model, then
+  // probe the neighbours of the best resolution found.
+  int res = std::clamp(static_cast<int>(std::lround(std::sqrt(target / 0.6))), 4, 16384);
+  std::vector<int> tried;
+  for (int it = 0; it < 6; ++it) {
+    if (std::find(tried.begin(), tried.end(), res) != tried.end()) break;
+    tried.push_back(res);
+    const long long n = trial(res);
+    const double scale = n > 0 ? std::sqrt(static_cast<double>(target) / n) : 2.0;
+    res = std::clamp(static_cast<int>(std::lround(res * scale)), 4, 16384);
+  }
+  for (int d : {-1, 1}) {
+    const int r = best.width + d;
+    if (r >= 4 && r <= 16384 && std::find(tried.begin(), tried.end(), r) == tried.end()) {
+      tried.push_back(r);
+      trial(r);
+    }
+  }
+  return best;
+}
+
+}  // namespace mcgim

@@ -1,0 +1,183 @@
+#include "optimize_samples.h"
+
+#include <Eigen/Sparse>
+#include <Eigen/IterativeLinearSolvers>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "isochart/error.h"
+
+namespace mcgim::detail {
+
+namespace {
+
+// One point of the original surface, located on the remesh.
+struct FitPoint {
+  int face;        // remesh face
+  Vec3d weights;   // barycentric in that face
+  Vec3d target;    // original surface point
+  double area;     // surface area it stands for
+};
+
+// Barycentric coordinates of q in the triangle (a, b, c); false when degenerate.
+bool barycentric_2d(const Vec2d& q, const Vec2d& a, const Vec2d& b, const Vec2d& c, Vec3d& w) {
+  const double d = cross(b - a, c - a);
+  if (d == 0) return false;
+  w.y = cross(q - a, c - a) / d;
+  w.z = cross(b - a, q - a) / d;
+  w.x = 1 - w.y - w.z;
+  return true;
+}
+
+std::vector<FitPoint> fit_points(const AtlasCharts& a, const Placement& pl, const std::vector<Vec2d>& param,
+                                 const GeometryImage& im, const Remesh& r) {
+  const Mesh& mesh = *a.mesh;
+  const int W = im.width, H = im.height;
+  // Faces of each block (lower-left sample), at most two.
+  std::vector<std::array<int, 2>> block_faces(static_cast<std::size_t>(W) * H, {-1, -1});
+  for (int f = 0; f < static_cast<int>(r.face_samples.size()); ++f) {
+    const auto& s = r.face_samples[f];
+    int x = W, y = H;
+    for (int k = 0; k < 3; ++k) {
+      x = std::min(x, s[k] % W);
+      y = std::min(y, s[k] / W);
+    }
+    auto& slot = block_faces[static_cast<std::size_t>(y) * W + x];
+    (slot[0] < 0 ? slot[0] : slot[1]) = f;
+  }
+  std::vector<FitPoint> pts;
+  // The remesh triangle holding q, in texture space: its corners at the samples' parameter
+  // locations (zippered samples sit on the chart boundary, not at their centres, so the
+  // triangle may reach into a neighbouring block).
+  auto locate = [&](int chart, const Vec2d& q, const Vec3d& target, double area) {
+    const int bx0 = static_cast<int>(std::floor(q.x - 0.5)), by0 = static_cast<int>(std::floor(q.y - 0.5));
+    static constexpr int order[9][2] = {{0, 0}, {-1, 0}, {1, 0}, {0, -1}, {0, 1}, {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
+    for (const auto& o : order) {
+      const int bx = bx0 + o[0], by = by0 + o[1];
+      if (bx < 0 || by < 0 || bx + 1 >= W || by + 1 >= H) continue;
+      for (int f : block_faces[static_cast<std::size_t>(by) * W + bx]) {
+        if (f < 0 || r.mesh.face_groups[f] != chart) continue;
+        const auto& s = r.face_samples[f];
+        Vec3d w;
+        if (!barycentric_2d(q, param[s[0]], param[s[1]], param[s[2]], w)) continue;
+        const double eps = -1e-9;
+        if (w.x < eps || w.y < eps || w.z < eps) continue;
+        pts.push_back({f, w, target, area});
+        return;
+      }
+    }
+  };
+  for (std::size_t c = 0; c < a.charts.size(); ++c) {
+    const Chart& ch = a.charts[c];
+    for (std::size_t lf = 0; lf < ch.local_faces.size(); ++lf) {
+      const Face& f = ch.local_faces[lf];
+      const Face& pf = mesh.faces[ch.faces[lf]];
+      const Vec2d t0 = pl.texel[c][f[0]], t1 = pl.texel[c][f[1]], t2 = pl.texel[c][f[2]];
+      const Vec3d p0 = mesh.positions[pf[0]], p1 = mesh.positions[pf[1]], p2 = mesh.positions[pf[2]];
+      const double area3 = isochart::triangle_area(p0, p1, p2);
+      const double area_t = std::abs(isochart::signed_area(t0, t1, t2));
+      // About two points per texel, at least one per face: centroids of an n×n subdivision.
+      const int n = std::clamp(static_cast<int>(std::ceil(std::sqrt(2.0 * area_t))), 1, 64);
+      const double w = area3 / (n * n);
+      for (int i = 0; i < n; ++i)
+        for (int j = 0; i + j < n; ++j) {
+          // Upright sub-triangle (i, j) and, when it exists, the inverted one next to it.
+          for (int up = 0; up < 2; ++up) {
+            if (up == 1 && i + j + 1 >= n) continue;
+            const double u = up == 0 ? (i + 1.0 / 3) / n : (i + 2.0 / 3) / n;
+            const double v = up == 0 ? (j + 1.0 / 3) / n : (j + 2.0 / 3) / n;
+            const double b0 = 1 - u - v;
+            locate(static_cast<int>(c), t0 * b0 + t1 * u + t2 * v, p0 * b0 + p1 * u + p2 * v, w);
+          }
+        }
+    }
+  }
+  return pts;
+}
+
+}  // namespace
+
+void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vector<Vec2d>& param,
+                      const LevelOptions& o, GeometryImage& im, Remesh& r, const isochart::Progress& progress) {
+  const int defined = im.defined_samples();
+  if (defined == 0) return;
+  const double texel_area = a.surface_area / defined;
+  const double lambda = o.optimize_regularization * texel_area;
+  // The pull is towards the zippered positions, which lie on the original surface. Kept per
+  // group: the remesh's vertex numbering may change when pockets appear or vanish.
+  std::vector<Vec3d> group_anchor(im.num_groups);
+  for (std::size_t i = 0; i < im.group.size(); ++i)
+    if (im.group[i] >= 0) group_anchor[im.group[i]] = im.positions[i];
+  for (int it = 0; it < o.optimize_iterations; ++it) {
+    std::vector<Vec3d> anchor(r.mesh.num_vertices());
+    for (std::size_t i = 0; i < im.group.size(); ++i)
+      if (r.sample_vertex[i] >= 0) anchor[r.sample_vertex[i]] = group_anchor[im.group[i]];
+    isochart::report(progress, isochart::Stage::Optimization, static_cast<double>(it) / o.optimize_iterations);
+    std::vector<FitPoint> pts = fit_points(a, pl, param, im, r);
+    // Points far from their triangle come from charts contracted or forced at this resolution,
+    // where the texture-space correspondence says nothing about the surface: leave them out.
+    const double reach2 = 9.0 * texel_area;
+    pts.erase(std::remove_if(pts.begin(), pts.end(),
+                             [&](const FitPoint& p) {
+                               const auto& f = r.mesh.faces[p.face];
+                               const Vec3d q = r.mesh.positions[f[0]] * p.weights.x +
+                                               r.mesh.positions[f[1]] * p.weights.y +
+                                               r.mesh.positions[f[2]] * p.weights.z;
+                               return squared_norm(q - p.target) > reach2;
+                             }),
+              pts.end());
+    const int nv = r.mesh.num_vertices();
+    std::vector<Eigen::Triplet<double>> trip;
+    trip.reserve(pts.size() * 9 + nv);
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nv, 3);
+    for (const FitPoint& p : pts) {
+      const auto& f = r.mesh.faces[p.face];
+      const double w[3] = {p.weights.x, p.weights.y, p.weights.z};
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) trip.emplace_back(f[i], f[j], p.area * w[i] * w[j]);
+        rhs(f[i], 0) += p.area * w[i] * p.target.x;
+        rhs(f[i], 1) += p.area * w[i] * p.target.y;
+        rhs(f[i], 2) += p.area * w[i] * p.target.z;
+      }
+    }
+    for (int v = 0; v < nv; ++v) {
+      trip.emplace_back(v, v, lambda);
+      rhs(v, 0) += lambda * anchor[v].x;
+      rhs(v, 1) += lambda * anchor[v].y;
+      rhs(v, 2) += lambda * anchor[v].z;
+    }
+    Eigen::SparseMatrix<double> A(nv, nv);
+    A.setFromTriplets(trip.begin(), trip.end());
+    // The system is a mass matrix plus a diagonal: well conditioned, so diagonally
+    // preconditioned conjugate gradients from the current positions converge in a few dozen
+    // iterations (a direct factorization fills in badly on image-sized grids).
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> solver;
+    solver.setTolerance(1e-10);
+    solver.setMaxIterations(200);
+    solver.compute(A);
+    Eigen::MatrixXd x0(nv, 3);
+    for (int v = 0; v < nv; ++v) {
+      x0(v, 0) = r.mesh.positions[v].x;
+      x0(v, 1) = r.mesh.positions[v].y;
+      x0(v, 2) = r.mesh.positions[v].z;
+    }
+    Eigen::MatrixXd x(nv, 3);
+    for (int d = 0; d < 3; ++d) x.col(d) = solver.solveWithGuess(rhs.col(d), x0.col(d));
+    // No sample moves by more than a texel from where zippering put it.
+    const double max_move = std::sqrt(texel_area);
+    std::vector<Vec3d> pos(nv);
+    for (int v = 0; v < nv; ++v) {
+      const Vec3d d = Vec3d{x(v, 0), x(v, 1), x(v, 2)} - anchor[v];
+      const double len = norm(d);
+      pos[v] = anchor[v] + (len > max_move ? d * (max_move / len) : d);
+    }
+    for (std::size_t i = 0; i < im.group.size(); ++i)
+      if (r.sample_vertex[i] >= 0) im.positions[i] = pos[r.sample_vertex[i]];
+    r = reconstruct(im);
+  }
+  isochart::report(progress, isochart::Stage::Optimization, 1.0);
+}
+
+}  // namespace mcgim::detail

@@ -1,0 +1,243 @@
+#include <algorithm>
+#include <array>
+#include <string>
+
+#include "isochart/error.h"
+#include "mcgim/geometry_image.h"
+#include "union_find.h"
+
+namespace mcgim {
+
+using isochart::Face;
+using isochart::Vec2d;
+using isochart::Vec3d;
+
+namespace {
+
+// A triangle counts as zero-area when its height is below 1e-9 of its longest edge (collinear
+// corners up to rounding: zippered seams produce exactly such triangles).
+bool is_degenerate(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const double l = std::max({squared_norm(b - a), squared_norm(c - b), squared_norm(a - c)});
+  const double cr = norm(cross(b - a, c - a));
+  return cr * cr <= 1e-18 * l * l;
+}
+
+}  // namespace
+
+int GeometryImage::defined_samples() const {
+  return static_cast<int>(std::count_if(chart.begin(), chart.end(), [](int c) { return c >= 0; }));
+}
+
+Remesh reconstruct(const GeometryImage& im) {
+  const int W = im.width, H = im.height;
+  const std::size_t N = static_cast<std::size_t>(W) * H;
+  if (W < 1 || H < 1 || im.positions.size() != N || im.normals.size() != N || im.chart.size() != N ||
+      im.group.size() != N)
+    throw isochart::InputError("", "geometry image arrays do not match its size " +
+                                       std::to_string(W) + "x" + std::to_string(H));
+  std::vector<int> group_sample(im.num_groups, -1);
+  for (std::size_t i = 0; i < N; ++i) {
+    if (!im.defined(static_cast<int>(i))) continue;
+    const int g = im.group[i];
+    if (g < 0 || g >= im.num_groups)
+      throw isochart::InputError("", "sample " + std::to_string(i % W) + "," + std::to_string(i / W) +
+                                         " has group " + std::to_string(g) + ", out of range");
+    if (group_sample[g] < 0) group_sample[g] = static_cast<int>(i);
+  }
+  Remesh r;
+  std::vector<std::array<int, 3>> tris;  // sample triples
+  std::vector<int> tri_chart;
+  for (int y = 0; y + 1 < H; ++y)
+    for (int x = 0; x + 1 < W; ++x) {
+      const int c[4] = {im.index(x, y), im.index(x + 1, y), im.index(x + 1, y + 1), im.index(x, y + 1)};
+      int n = 0, missing = -1, chart = -1;
+      for (int k = 0; k < 4; ++k) {
+        if (!im.defined(c[k])) {
+          missing = k;
+          continue;
+        }
+        ++n;
+        if (chart >= 0 && im.chart[c[k]] != chart)
+          throw isochart::InputError("", "block at sample " + std::to_string(x) + "," + std::to_string(y) +
+                                             " mixes charts " + std::to_string(chart) + " and " +
+                                             std::to_string(im.chart[c[k]]));
+        chart = im.chart[c[k]];
+      }
+      if (n < 3) continue;
+      const bool mirrored = chart < static_cast<int>(im.chart_mirrored.size()) && im.chart_mirrored[chart];
+      std::array<int, 3> t[2];
+      int nt = 0;
+      if (n == 4) {
+        // The shorter diagonal after zippering; a diagonal whose ends were welded has length 0,
+        // so both triangles collapse instead of folding onto each other.
+        const double d02 = squared_norm(im.positions[c[0]] - im.positions[c[2]]);
+        const double d13 = squared_norm(im.positions[c[1]] - im.positions[c[3]]);
+        if (d02 <= d13) {
+          t[0] = {c[0], c[1], c[2]};
+          t[1] = {c[0], c[2], c[3]};
+        } else {
+          t[0] = {c[0], c[1], c[3]};
+          t[1] = {c[1], c[2], c[3]};
+        }
+        nt = 2;
+      } else {
+        for (int k = 1; k <= 3; ++k) t[0][k - 1] = c[(missing + k) % 4];
+        nt = 1;
+      }
+      for (int i = 0; i < nt; ++i) {
+        if (mirrored) std::swap(t[i][1], t[i][2]);
+        const int g0 = im.group[t[i][0]], g1 = im.group[t[i][1]], g2 = im.group[t[i][2]];
+        if (g0 == g1 || g1 == g2 || g0 == g2) {
+          ++r.collapsed_faces;
+          continue;
+        }
+        tris.push_back(t[i]);
+        tri_chart.push_back(chart);
+      }
+    }
+  // Where both sides of a seam cut the same corner, the two charts produce the same triangle
+  // with opposite orientations: a closed pocket of two faces hanging on an edge. Removing both
+  // faces removes the pocket (and leaves the surface manifold).
+  {
+    std::vector<std::array<int, 4>> keys;  // rotated group triple + triangle index
+    keys.reserve(tris.size());
+    for (std::size_t i = 0; i < tris.size(); ++i) {
+      std::array<int, 3> g = {im.group[tris[i][0]], im.group[tris[i][1]], im.group[tris[i][2]]};
+      std::rotate(g.begin(), std::min_element(g.begin(), g.end()), g.end());
+      keys.push_back({g[0], std::min(g[1], g[2]), std::max(g[1], g[2]), static_cast<int>(i)});
+    }
+    std::sort(keys.begin(), keys.end());
+    std::vector<char> drop(tris.size(), 0);
+    for (std::size_t i = 0; i < keys.size();) {
+      std::size_t j = i;
+      while (j < keys.size() && keys[j][0] == keys[i][0] && keys[j][1] == keys[i][1] && keys[j][2] == keys[i][2]) ++j;
+      // Pair faces of opposite orientation within the run.
+      std::vector<int> pos, neg;
+      for (std::size_t k = i; k < j; ++k) {
+        const auto& t = tris[keys[k][3]];
+        std::array<int, 3> g = {im.group[t[0]], im.group[t[1]], im.group[t[2]]};
+        std::rotate(g.begin(), std::min_element(g.begin(), g.end()), g.end());
+        (g[1] < g[2] ? pos : neg).push_back(keys[k][3]);
+      }
+      for (std::size_t k = 0; k < std::min(pos.size(), neg.size()); ++k) drop[pos[k]] = drop[neg[k]] = 1;
+      i = j;
+    }
+    std::size_t out = 0;
+    for (std::size_t i = 0; i < tris.size(); ++i) {
+      if (drop[i]) {
+        ++r.pocket_faces;
+        continue;
+      }
+      tris[out] = tris[i];
+      tri_chart[out] = tri_chart[i];
+      ++out;
+    }
+    tris.resize(out);
+    tri_chart.resize(out);
+  }
+  // A contracted seam can also close a few triangles into a small closed surface touching the
+  // rest only at a vertex. Of the edge-connected pieces that touch at vertices, keep the one
+  // with the most faces.
+  {
+    const int nt = static_cast<int>(tris.size());
+    std::vector<std::array<int, 3>> edges;  // (group a, group b, triangle), a < b
+    edges.reserve(3 * tris.size());
+    for (int i = 0; i < nt; ++i)
+      for (int k = 0; k < 3; ++k) {
+        const int a = im.group[tris[i][k]], b = im.group[tris[i][(k + 1) % 3]];
+        edges.push_back({std::min(a, b), std::max(a, b), i});
+      }
+    std::sort(edges.begin(), edges.end());
+    detail::UnionFind pieces(nt);
+    for (std::size_t i = 1; i < edges.size(); ++i)
+      if (edges[i][0] == edges[i - 1][0] && edges[i][1] == edges[i - 1][1]) pieces.unite(edges[i][2], edges[i - 1][2]);
+    std::vector<int> piece_faces(nt, 0);
+    for (int i = 0; i < nt; ++i) ++piece_faces[pieces.find(i)];
+    // Pieces sharing a vertex: cluster them through the groups.
+    detail::UnionFind clusters(nt);
+    std::vector<int> group_piece(im.num_groups, -1);
+    for (int i = 0; i < nt; ++i)
+      for (int smp : tris[i]) {
+        int& gp = group_piece[im.group[smp]];
+        if (gp < 0) gp = pieces.find(i);
+        else clusters.unite(gp, pieces.find(i));
+      }
+    std::vector<int> best(nt, -1);
+    for (int i = 0; i < nt; ++i) {
+      const int p = pieces.find(i), c = clusters.find(p);
+      int& b = best[c];
+      if (b < 0 || piece_faces[p] > piece_faces[b] || (piece_faces[p] == piece_faces[b] && p < b)) b = p;
+    }
+    std::size_t out = 0;
+    for (int i = 0; i < nt; ++i) {
+      const int p = pieces.find(i);
+      if (best[clusters.find(p)] != p) {
+        ++r.pocket_faces;
+        continue;
+      }
+      tris[out] = tris[i];
+      tri_chart[out] = tri_chart[i];
+      ++out;
+    }
+    tris.resize(out);
+    tri_chart.resize(out);
+  }
+  // Vertices in group order.
+  std::vector<int> group_vertex(im.num_groups, -1);
+  for (const auto& t : tris)
+    for (int s : t) group_vertex[im.group[s]] = 0;
+  int nv = 0;
+  for (int g = 0; g < im.num_groups; ++g)
+    if (group_vertex[g] == 0) group_vertex[g] = nv++;
+  isochart::Mesh& m = r.mesh;
+  m.positions.resize(nv);
+  m.normals.resize(nv);
+  for (int g = 0; g < im.num_groups; ++g) {
+    if (group_vertex[g] < 0) continue;
+    m.positions[group_vertex[g]] = im.positions[group_sample[g]];
+    m.normals[group_vertex[g]] = im.normals[group_sample[g]];
+  }
+  r.sample_vertex.assign(N, -1);
+  std::vector<int> sample_uv(N, -1);
+  for (std::size_t i = 0; i < N; ++i)
+    if (im.defined(static_cast<int>(i))) r.sample_vertex[i] = group_vertex[im.group[i]];
+  m.faces.reserve(tris.size());
+  m.face_uvs.reserve(tris.size());
+  m.face_groups = tri_chart;
+  r.face_samples = tris;
+  for (const auto& t : tris) {
+    Face f, fu;
+    for (int k = 0; k < 3; ++k) {
+      f[k] = r.sample_vertex[t[k]];
+      if (sample_uv[t[k]] < 0) {
+        sample_uv[t[k]] = static_cast<int>(m.uvs.size());
+        m.uvs.push_back({(t[k] % W + 0.5) / W, (t[k] / W + 0.5) / H});
+      }
+      fu[k] = sample_uv[t[k]];
+    }
+    m.faces.push_back(f);
+    m.face_uvs.push_back(fu);
+    if (is_degenerate(m.positions[f[0]], m.positions[f[1]], m.positions[f[2]])) ++r.degenerate_faces;
+  }
+  return r;
+}
+
+TopologyCheck check_topology(const isochart::Mesh& mesh) {
+  TopologyCheck c;
+  const isochart::Topology topo(mesh);
+  c.vertices = topo.num_referenced_vertices();
+  c.faces = mesh.num_faces();
+  c.edges = topo.num_edges();
+  for (int e = 0; e < topo.num_edges(); ++e)
+    if (topo.edge_faces(e).size() == 1) ++c.boundary_edges;
+  c.nonmanifold_edges = static_cast<int>(topo.nonmanifold_edges().size());
+  c.nonmanifold_vertices = static_cast<int>(topo.nonmanifold_vertices().size());
+  c.boundary_loops = static_cast<int>(topo.boundary_loops().size());
+  c.components = topo.num_components();
+  c.euler_characteristic = topo.euler_characteristic();
+  for (const Face& f : mesh.faces)
+    if (is_degenerate(mesh.positions[f[0]], mesh.positions[f[1]], mesh.positions[f[2]])) ++c.degenerate_faces;
+  return c;
+}
+
+}  // namespace mcgim

@@ -1,0 +1,186 @@
+#include "mcgim/mcgim.h"
+
+#include <tbb/global_control.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <map>
+#include <string>
+
+#include "isochart/error.h"
+#include "isochart/mesh.h"
+#include "mcgim/psnr.h"
+#include "synthetic_atlases.h"
+
+using namespace mcgim;
+using isochart::Vec3d;
+
+namespace {
+
+LevelOptions keep_layout(int res, bool optimize = true) {
+  LevelOptions o;
+  o.width = o.height = res;
+  o.repack = false;
+  o.optimize = optimize;
+  return o;
+}
+
+// The remesh is watertight: every edge has exactly two faces (so no crack and no T-junction,
+// which would leave an edge with one face), every vertex one fan, and the original's Euler
+// characteristic; welded samples hold exactly one position.
+void check_watertight(const Level& lv, int euler) {
+  const TopologyCheck& t = lv.stats.topology;
+  CHECK(t.faces > 0);
+  CHECK(t.boundary_edges == 0);
+  CHECK(t.nonmanifold_edges == 0);
+  CHECK(t.nonmanifold_vertices == 0);
+  CHECK(t.boundary_loops == 0);
+  CHECK(t.components == 1);
+  CHECK(t.euler_characteristic == euler);
+  CHECK(lv.stats.input_euler_characteristic == euler);
+  const GeometryImage& im = lv.image;
+  std::map<int, Vec3d> pos;
+  bool same = true;
+  for (std::size_t i = 0; i < im.group.size(); ++i) {
+    if (im.chart[i] < 0) continue;
+    const auto it = pos.emplace(im.group[i], im.positions[i]).first;
+    same = same && it->second == im.positions[i];
+  }
+  CHECK(same);
+  CHECK(static_cast<int>(pos.size()) == im.num_groups);
+  CHECK(lv.stats.unique_vertices <= lv.stats.defined_samples);
+}
+
+}  // namespace
+
+TEST_CASE("closed synthetic atlases remesh watertight at several resolutions", "[mcgim]") {
+  for (int res : {16, 24, 37, 64, 128}) {
+    INFO("cube " << res);
+    const Level lv = build_level(mcgim_test::cube_atlas(6), keep_layout(res));
+    check_watertight(lv, 2);
+  }
+  for (int res : {24, 37, 64, 128}) {
+    INFO("sphere " << res);
+    const Level lv = build_level(mcgim_test::sphere_atlas(24, 48), keep_layout(res));
+    check_watertight(lv, 2);
+    CHECK(lv.stats.cut_nodes == 3);  // the equator has no natural node: three are added
+  }
+  for (int res : {16, 33, 64, 128}) {
+    INFO("torus " << res);
+    const Level lv = build_level(mcgim_test::torus_atlas(48, 24), keep_layout(res));
+    check_watertight(lv, 0);
+  }
+}
+
+TEST_CASE("an open mesh keeps its boundary loops", "[mcgim]") {
+  for (int res : {24, 40, 64, 128}) {
+    INFO("cylinder " << res);
+    const Level lv = build_level(mcgim_test::cylinder_atlas(32, 8), keep_layout(res));
+    const TopologyCheck& t = lv.stats.topology;
+    CHECK(t.boundary_loops == 2);
+    CHECK(t.nonmanifold_edges == 0);
+    CHECK(t.nonmanifold_vertices == 0);
+    CHECK(t.euler_characteristic == 0);
+    CHECK(lv.stats.input_boundary_loops == 2);
+  }
+}
+
+TEST_CASE("a chart with a hole is slit open and zippered back", "[mcgim]") {
+  // The cylinder as one chart laid out as an annulus: two boundary loops in one chart.
+  isochart::Mesh m = mcgim_test::cylinder_atlas(48, 12);
+  m.uvs.clear();
+  m.face_uvs.clear();
+  for (const auto& p : m.positions) {
+    const double r = 0.2 + 0.25 * (p.z + 1) / 2, a = std::atan2(p.y, p.x);
+    m.uvs.push_back({0.5 + r * std::cos(a), 0.5 + r * std::sin(a)});
+  }
+  m.face_uvs = m.faces;
+  m.face_groups.assign(m.faces.size(), 0);
+  for (int res : {48, 96}) {
+    const Level lv = build_level(m, keep_layout(res));
+    const TopologyCheck& t = lv.stats.topology;
+    CHECK(t.boundary_loops == 2);
+    CHECK(t.nonmanifold_edges == 0);
+    CHECK(t.nonmanifold_vertices == 0);
+    CHECK(t.euler_characteristic == 0);
+  }
+}
+
+TEST_CASE("zero-area and collapsed triangles are counted consistently", "[mcgim]") {
+  const Level lv = build_level(mcgim_test::cube_atlas(4), keep_layout(40, false));
+  CHECK(lv.stats.degenerate_triangles == lv.stats.topology.degenerate_faces);
+  CHECK(lv.remesh.degenerate_faces == lv.stats.degenerate_triangles);
+  // Where a denser side meets a sparser one, samples collapse into one group.
+  CHECK(lv.stats.collapsed_triangles + lv.remesh.pocket_faces >= 0);
+  CHECK(lv.stats.unique_vertices < lv.stats.defined_samples);
+  // A flat cube zippered along its edges is reproduced exactly.
+  DistanceOptions d;
+  d.samples = 20000;
+  const DistanceResult r = measure_distance(mcgim_test::cube_atlas(4), lv.remesh.mesh, d);
+  CHECK(r.hausdorff < 1e-9);
+}
+
+TEST_CASE("sample optimization brings the remesh closer to the surface", "[mcgim]") {
+  const isochart::Mesh m = mcgim_test::sphere_atlas(32, 64);
+  DistanceOptions d;
+  d.samples = 50000;
+  for (int res : {48, 96}) {
+    const DistanceResult before = measure_distance(m, build_level(m, keep_layout(res, false)).remesh.mesh, d);
+    const DistanceResult after = measure_distance(m, build_level(m, keep_layout(res, true)).remesh.mesh, d);
+    INFO(res << ": " << before.psnr << " dB -> " << after.psnr << " dB");
+    CHECK(after.psnr > before.psnr + 1.0);
+  }
+}
+
+TEST_CASE("levels are deterministic and independent of the thread count", "[mcgim]") {
+  const isochart::Mesh m = mcgim_test::torus_atlas(40, 20);
+  auto run = [&](int threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    return build_level(m, keep_layout(64));
+  };
+  const Level a = run(1), b = run(2), c = run(2);
+  for (const Level* x : {&b, &c}) {
+    CHECK(x->image.chart == a.image.chart);
+    CHECK(x->image.group == a.image.group);
+    CHECK(x->image.positions == a.image.positions);
+    CHECK(x->remesh.mesh.faces == a.remesh.mesh.faces);
+    CHECK(x->remesh.mesh.positions == a.remesh.mesh.positions);
+  }
+}
+
+TEST_CASE("invalid atlases and options are input errors", "[mcgim]") {
+  isochart::Mesh m = mcgim_test::cube_atlas(2);
+  CHECK_THROWS_AS(build_level(m, keep_layout(1)), isochart::InputError);
+  // Charts laid out closer than a texel.
+  CHECK_THROWS_AS(build_level(mcgim_test::cube_atlas(2, 0.001), keep_layout(64)), isochart::InputError);
+  // Texture coordinates outside [0,1]² with the layout kept.
+  isochart::Mesh out = m;
+  for (auto& uv : out.uvs) uv.x += 2;
+  CHECK_THROWS_AS(build_level(out, keep_layout(64)), isochart::InputError);
+  // No texture coordinates.
+  isochart::Mesh bare = m;
+  bare.uvs.clear();
+  bare.face_uvs.clear();
+  CHECK_THROWS_AS(build_level(bare, keep_layout(64)), isochart::InputError);
+  // A chart covering a closed surface is not a disk.
+  isochart::Mesh closed = m;
+  closed.face_groups.assign(closed.faces.size(), 0);
+  closed.uvs.clear();
+  for (const auto& p : closed.positions) closed.uvs.push_back({0.5 + 0.2 * p.x, 0.5 + 0.2 * p.y});
+  closed.face_uvs = closed.faces;
+  CHECK_THROWS_AS(build_level(closed, keep_layout(64)), isochart::InputError);
+}
+
+TEST_CASE("the resolution search reaches the sample budget", "[mcgim]") {
+  const isochart::Mesh m = mcgim_test::sphere_atlas(16, 32);
+  LevelOptions o;
+  o.repack = false;
+  for (long long target : {2000LL, 8000LL}) {
+    const ResolutionChoice c = choose_resolution(m, target, o);
+    INFO(target << " -> " << c.width << " (" << c.defined_samples << ")");
+    CHECK(c.width == c.height);
+    CHECK(std::abs(c.defined_samples - target) < 0.05 * target);
+    o.width = o.height = c.width;
+    CHECK(std::abs(build_level(m, o).stats.defined_samples - target) < 0.06 * target);
+  }
+}
