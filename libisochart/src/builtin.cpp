@@ -28,12 +28,12 @@ constexpr double kPi = 3.14159265358979323846;
 Mesh make_sphere(int subdivisions) {
   const double t = (1 + std::sqrt(5.0)) / 2;
   Mesh m;
-  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.positions = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   for (auto& p : m.positions) p = normalized(p);
-  m.faces = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+  m.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
              {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-             {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int s = 0; s < subdivisions; ++s) {
     std::map<std::pair<int, int>, int> midpoint;
     auto mid = [&](int a, int b) {
@@ -102,11 +102,11 @@ double face_height(double x, double y) {
   const double u = x / kFaceHalfWidth;
   const double r2 = u * u + y * y;
   double z = 0.5 * std::sqrt(std::max(0.0, 1 - 0.75 * r2));  // the dome of the skull
-  z += 0.06 * gauss(x, y, 0, 0.55, 0.35, 0.25);                // forehead
+  z += 0.06 * gauss(x, y, 0, 0.55, 0.35, 0.25);              // forehead
   for (double s : {-1.0, 1.0}) {
-    z += 0.05 * gauss(x, y, s * 0.28, 0.28, 0.15, 0.05);  // brow ridge
-    z -= 0.13 * gauss(x, y, s * 0.28, 0.12, 0.11, 0.08);  // eye socket
-    z += 0.06 * gauss(x, y, s * 0.28, 0.11, 0.055, 0.04); // eyeball
+    z += 0.05 * gauss(x, y, s * 0.28, 0.28, 0.15, 0.05);     // brow ridge
+    z -= 0.13 * gauss(x, y, s * 0.28, 0.12, 0.11, 0.08);     // eye socket
+    z += 0.06 * gauss(x, y, s * 0.28, 0.11, 0.055, 0.04);    // eyeball
     z += 0.05 * gauss(x, y, s * 0.08, -0.17, 0.045, 0.035);  // nostril wing
     z += 0.05 * gauss(x, y, s * 0.38, -0.15, 0.15, 0.15);    // cheek
   }
@@ -143,8 +143,8 @@ Mesh make_face(int rings) {
     // Zip the two rings by angle; angles compared exactly as fractions p/n_in vs q/n_out.
     int p = 0, q = 0;
     while (p < n_in || q < n_out) {
-      const bool advance_inner =
-          q == n_out || (p < n_in && static_cast<long long>(p + 1) * n_out <= static_cast<long long>(q + 1) * n_in);
+      const bool advance_inner = q == n_out || (p < n_in && static_cast<long long>(p + 1) * n_out <=
+                                                                static_cast<long long>(q + 1) * n_in);
       if (advance_inner) {
         m.faces.push_back({in(p), out(q), in(p + 1)});
         ++p;
@@ -173,11 +173,32 @@ double smooth_min(double a, double b, double k) {
 
 struct Primitive {
   enum Kind { Ellipsoid, RoundCone } kind = Ellipsoid;
-  Vec3d a, b;         // ellipsoid: centre, radii; round cone: axis end points
+  Vec3d a, b;             // ellipsoid: centre, radii; round cone: axis end points
   double ra = 0, rb = 0;  // round cone radii at a and b
-  double blend = 0;   // smooth-min radius joining this primitive to the ones before it
-  Vec3d flatten_dir;  // round cone: squash across this unit direction...
-  double flatten = 1; // ...by this factor (1 = circular cross-section)
+  double blend = 0;       // smooth-min radius joining this primitive to the ones before it
+  Vec3d flatten_dir;      // round cone: squash across this unit direction...
+  double flatten = 1;     // ...by this factor (1 = circular cross-section)
+  // eval(p) ≥ bound_scale · (|p − bound_centre| − bound_radius) wherever the right side is
+  // positive (bound_scale = 0: no bound known). Lets Implicit skip parts that cannot change
+  // the smooth minimum.
+  Vec3d bound_centre;
+  double bound_radius = 0, bound_scale = 0;
+
+  void set_bound() {
+    if (kind == Ellipsoid) {
+      // k0 ≥ |q|/r_max and k1 ≤ |q|/r_min², so k0(k0−1)/k1 ≥ (r_min/r_max)²·(|q| − r_max)
+      // wherever that is positive.
+      const double rmax = std::max({b.x, b.y, b.z}), rmin = std::min({b.x, b.y, b.z});
+      bound_centre = a;
+      bound_radius = rmax;
+      bound_scale = (rmin / rmax) * (rmin / rmax);
+    } else if (flatten == 1) {
+      // An exact distance is at least the distance to a sphere around the whole cone.
+      bound_centre = (a + b) * 0.5;
+      bound_radius = 0.5 * norm(b - a) + std::max(ra, rb);
+      bound_scale = 1;
+    }
+  }
 
   double eval(const Vec3d& p) const {
     if (kind == Ellipsoid) {
@@ -222,7 +243,15 @@ struct Implicit {
 
   double operator()(const Vec3d& p) const {
     double d = parts[0].eval(p);
-    for (std::size_t i = 1; i < parts.size(); ++i) d = smooth_min(d, parts[i].eval(p), parts[i].blend);
+    for (std::size_t i = 1; i < parts.size(); ++i) {
+      const Primitive& q = parts[i];
+      // smooth_min(d, e, k) == d exactly when e ≥ d + k: skipping such a part changes nothing.
+      if (q.bound_scale > 0) {
+        const double lower = q.bound_scale * (norm(p - q.bound_centre) - q.bound_radius);
+        if (lower > 0 && lower >= d + q.blend) continue;
+      }
+      d = smooth_min(d, q.eval(p), q.blend);
+    }
     return d;
   }
   // Value and gradient (forward differences: four evaluations, the dominant cost of remeshing).
@@ -275,10 +304,10 @@ Primitive round_cone(Vec3d a, Vec3d b, double ra, double rb, double blend) {
 // Appendages are kept apart so that the smooth union never bridges them (genus 0).
 Implicit creature_shape() {
   Implicit f;
-  f.parts.push_back(ellipsoid({0, 0, 0}, {0.85, 0.42, 0.40}, 0));                     // belly
+  f.parts.push_back(ellipsoid({0, 0, 0}, {0.85, 0.42, 0.40}, 0));                    // belly
   f.parts.push_back(ellipsoid({0.45, 0.05, 0}, {0.45, 0.42, 0.38}, 0.2));            // chest
   f.parts.push_back(ellipsoid({-0.5, 0.02, 0}, {0.42, 0.38, 0.36}, 0.2));            // hips
-  f.parts.push_back(round_cone({0.55, 0.2, 0}, {0.98, 0.62, 0}, 0.24, 0.18, 0.15));   // neck
+  f.parts.push_back(round_cone({0.55, 0.2, 0}, {0.98, 0.62, 0}, 0.24, 0.18, 0.15));  // neck
   f.parts.push_back(ellipsoid({1.08, 0.74, 0}, {0.3, 0.26, 0.25}, 0.1));             // skull
   f.parts.push_back(round_cone({1.15, 0.7, 0}, {1.48, 0.6, 0}, 0.16, 0.1, 0.08));    // snout
   for (double s : {-1.0, 1.0}) {
@@ -289,14 +318,17 @@ Implicit creature_shape() {
     f.parts.push_back(ellipsoid({1.28, 0.81, s * 0.16}, {0.045, 0.045, 0.045}, 0.02));  // eye
   }
   for (double s : {-1.0, 1.0}) {
-    f.parts.push_back(round_cone({0.5, -0.15, s * 0.22}, {0.55, -0.95, s * 0.24}, 0.13, 0.09, 0.1));   // front leg
-    f.parts.push_back(ellipsoid({0.6, -0.98, s * 0.24}, {0.14, 0.07, 0.1}, 0.06));                  // front paw
-    f.parts.push_back(round_cone({-0.55, -0.1, s * 0.22}, {-0.6, -0.95, s * 0.24}, 0.15, 0.09, 0.1));  // hind leg
-    f.parts.push_back(ellipsoid({-0.55, -0.98, s * 0.24}, {0.14, 0.07, 0.1}, 0.06));                 // hind paw
+    f.parts.push_back(
+        round_cone({0.5, -0.15, s * 0.22}, {0.55, -0.95, s * 0.24}, 0.13, 0.09, 0.1));  // front leg
+    f.parts.push_back(ellipsoid({0.6, -0.98, s * 0.24}, {0.14, 0.07, 0.1}, 0.06));      // front paw
+    f.parts.push_back(
+        round_cone({-0.55, -0.1, s * 0.22}, {-0.6, -0.95, s * 0.24}, 0.15, 0.09, 0.1));  // hind leg
+    f.parts.push_back(ellipsoid({-0.55, -0.98, s * 0.24}, {0.14, 0.07, 0.1}, 0.06));     // hind paw
   }
   f.parts.push_back(round_cone({-0.75, 0.12, 0}, {-1.1, 0.3, 0}, 0.095, 0.075, 0.08));  // tail
   f.parts.push_back(round_cone({-1.1, 0.3, 0}, {-1.3, 0.55, 0}, 0.075, 0.062, 0.04));
   f.parts.push_back(round_cone({-1.3, 0.55, 0}, {-1.36, 0.82, 0}, 0.062, 0.05, 0.04));
+  for (auto& p : f.parts) p.set_bound();
   return f;
 }
 
@@ -337,7 +369,8 @@ Soup marching_tetrahedra(const Implicit& f, double h) {
   // x=1, y=2, z=4); a crossing edge's vertex is stored under (lower point, offset code).
   std::vector<int> edge_vertex(n * 7, -1);
   Soup soup;
-  const int offset[8][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}};
+  const int offset[8][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0},
+                            {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}};
   std::array<std::array<int, 4>, 6> tets;
   {
     const int perms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
@@ -411,7 +444,8 @@ Soup marching_tetrahedra(const Implicit& f, double h) {
             // Quad ac, ad, bd, bc (a, b inside; c, d outside), split along its shorter diagonal.
             const int a = in_c[0], b = in_c[1], c = out_c[0], d = out_c[1];
             const std::array<int, 2> ac{a, c}, ad{a, d}, bd{b, d}, bc{b, c};
-            const int vac = vertex_on(a, c), vad = vertex_on(a, d), vbd = vertex_on(b, d), vbc = vertex_on(b, c);
+            const int vac = vertex_on(a, c), vad = vertex_on(a, d), vbd = vertex_on(b, d),
+                      vbc = vertex_on(b, c);
             const auto& P = soup.positions;
             const double d1 = squared_norm(P[vac] - P[vbd]), d2 = squared_norm(P[vad] - P[vbc]);
             if (d1 <= d2) {
@@ -630,7 +664,9 @@ class HalfedgeMesh {
   std::uint32_t stamp_ = 0;
 };
 
-Vec3d unit_normal(const Vec3d& a, const Vec3d& b, const Vec3d& c) { return normalized(cross(b - a, c - a)); }
+Vec3d unit_normal(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  return normalized(cross(b - a, c - a));
+}
 
 // Isotropic remeshing towards edge length `target`, keeping vertices on the implicit surface.
 void remesh(HalfedgeMesh& m, const Implicit& f, double target, int iterations) {
@@ -695,8 +731,8 @@ void remesh(HalfedgeMesh& m, const Implicit& f, double target, int iterations) {
       const int a = m.from(h), b = m.to(h), c = m.to(HalfedgeMesh::next(h)), d = m.to(HalfedgeMesh::next(t));
       auto dev = [](int v) { return (v - 6) * (v - 6); };
       const int before = dev(m.valence(a)) + dev(m.valence(b)) + dev(m.valence(c)) + dev(m.valence(d));
-      const int after = dev(m.valence(a) - 1) + dev(m.valence(b) - 1) + dev(m.valence(c) + 1) +
-                        dev(m.valence(d) + 1);
+      const int after =
+          dev(m.valence(a) - 1) + dev(m.valence(b) - 1) + dev(m.valence(c) + 1) + dev(m.valence(d) + 1);
       if (after >= before) continue;
       const Vec3d &pa = m.position(a), &pb = m.position(b), &pc = m.position(c), &pd = m.position(d);
       const Vec3d old_n = unit_normal(pa, pb, pc) + unit_normal(pb, pa, pd);
@@ -742,7 +778,9 @@ Mesh make_creature() {
 
 }  // namespace
 
-std::vector<std::string> builtin_names() { return {"sphere", "torus", "creature", "face"}; }
+std::vector<std::string> builtin_names() {
+  return {"sphere", "torus", "creature", "face"};
+}
 
 Mesh make_builtin(const std::string& name) {
   if (name == "sphere") return make_sphere(4);
