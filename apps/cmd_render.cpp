@@ -32,19 +32,21 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   if (a.charts && !a.texture.empty()) bad_option("--charts and --texture are exclusive");
   if (a.uv_layout && (!a.texture.empty() || a.wireframe || a.ortho || a.transparent))
-    bad_option("--uv-layout draws the atlas itself; it takes no --texture, --wireframe, --ortho or --transparent");
+    bad_option(
+        "--uv-layout draws the atlas itself; it takes no --texture, --wireframe, --ortho or --transparent");
   const int width = a.width > 0 ? a.width : (a.uv_layout ? 1024 : 400 * a.views);
   const int height = a.height > 0 ? a.height : (a.uv_layout ? 1024 : 400);
-  if (static_cast<long long>(width) * height * a.supersample * a.supersample > (1LL << 28))
+  if (static_cast<long long>(width) * height * a.supersample * a.supersample > (1LL << 25))
     bad_option("image " + std::to_string(width) + "x" + std::to_string(height) + " with supersample " +
                std::to_string(a.supersample) + " is too large to render");
   if (!a.uv_layout && width < a.views)
-    bad_option("--width " + std::to_string(width) + " is too small for " + std::to_string(a.views) + " views");
+    bad_option("--width " + std::to_string(width) + " is too small for " + std::to_string(a.views) +
+               " views");
 
   // Built-in meshes are clean by construction and need no loading or repair.
   const std::string prefix = "builtin:";
   isochart::Mesh mesh = a.input.rfind(prefix, 0) == 0 ? isochart::make_builtin(a.input.substr(prefix.size()))
-                                                       : ctx.load(a.input).mesh;
+                                                      : ctx.load(a.input).mesh;
   // The options are checked above, so what the library still rejects is the mesh's content
   // (no charts, no UVs, bad indices): name the mesh file.
   auto for_input = [&](auto&& fn) {
@@ -104,18 +106,21 @@ void run_render(const Context& ctx, const RenderArgs& a) {
 
 void add_render(CLI::App& app, Context& ctx, Action& action) {
   auto args = std::make_shared<RenderArgs>();
-  CLI::App* sub = app.add_subcommand("render", "Render views of a mesh (shaded, charts, textured) or its UV layout");
+  CLI::App* sub =
+      app.add_subcommand("render", "Render views of a mesh (shaded, charts, textured) or its UV layout");
   sub->add_option("input", args->input, "Mesh file (OBJ/OFF/PLY/glTF) or builtin:NAME")->required();
   sub->add_option("-o,--output", args->output, "Output image (.png, .jpg, .exr, ...)")->required();
   sub->add_option("--texture", args->texture, "Texture image mapped through the mesh's UVs");
   sub->add_flag("--charts", args->charts, "Colour each chart (face groups, else UV charts)");
   sub->add_flag("--wireframe", args->wireframe, "Draw the triangle edges");
   sub->add_flag("--uv-layout", args->uv_layout, "Draw the atlas in texture space instead of 3D views");
-  sub->add_option("--views", args->views, "Number of views side by side: front, right, back, left, top, bottom, "
-                                          "front-right, back-left")
+  sub->add_option("--views", args->views,
+                  "Number of views side by side: front, right, back, left, top, bottom, "
+                  "front-right, back-left")
       ->check(CLI::Range(1, 8))
       ->capture_default_str();
-  sub->add_option("--width", args->width, "Image width in pixels (default 400 per view; 1024 for --uv-layout)")
+  sub->add_option("--width", args->width,
+                  "Image width in pixels (default 400 per view; 1024 for --uv-layout)")
       ->check(CLI::Range(1, 16384));
   sub->add_option("--height", args->height, "Image height in pixels (default 400; 1024 for --uv-layout)")
       ->check(CLI::Range(1, 16384));

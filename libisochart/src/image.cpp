@@ -2,9 +2,8 @@
 // failure path reads them (which also clears them, so OIIO does not complain at exit).
 #include "isochart/image.h"
 
-#include <unistd.h>
-
 #include <OpenImageIO/imageio.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -90,18 +89,21 @@ Image read_image(const std::string& path) {
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
   auto in = OIIO::ImageInput::open(path, &config);
-  if (!in) throw InputError(path, with_detail("cannot read image: unknown format or unreadable file", OIIO::geterror()));
+  if (!in)
+    throw InputError(path,
+                     with_detail("cannot read image: unknown format or unreadable file", OIIO::geterror()));
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
     in->geterror();
     throw InputError(path, "image has no pixels (" + std::to_string(spec.width) + "x" +
-                               std::to_string(spec.height) + ", " + std::to_string(spec.nchannels) + " channels)");
+                               std::to_string(spec.height) + ", " + std::to_string(spec.nchannels) +
+                               " channels)");
   }
   if (spec.depth > 1) throw InputError(path, "volume images are not supported");
   const long long values = static_cast<long long>(spec.width) * spec.height * spec.nchannels;
   if (values > kMaxImageValues)
-    throw InputError(path, "image too large (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
-                               "x" + std::to_string(spec.nchannels) + ")");
+    throw InputError(path, "image too large (" + std::to_string(spec.width) + "x" +
+                               std::to_string(spec.height) + "x" + std::to_string(spec.nchannels) + ")");
 
   Image image(spec.width, spec.height, spec.nchannels);
   const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data());
@@ -148,7 +150,8 @@ void write_image(const std::string& path, const Image& image) {
   int channels = image.channels;
   // JPEG has no alpha; keep colour (or grey) only.
   if ((ext == ".jpg" || ext == ".jpeg") && (channels == 2 || channels == 4)) --channels;
-  OIIO::ImageSpec spec(image.width, image.height, channels, is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+  OIIO::ImageSpec spec(image.width, image.height, channels,
+                       is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
   if (channels == 4 || channels == 2) {
     spec.alpha_channel = channels - 1;
     // Our pixels have straight alpha; without this the writer would divide colours by alpha.

@@ -23,7 +23,9 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kMaxSide = 16384;
-constexpr long long kMaxSamples = 1LL << 28;  // per render, after supersampling
+// Samples per render after supersampling: 12 bytes each for the 3D renderer (depth, face),
+// 12 for the UV layout (RGB), so at most about 400 MB.
+constexpr long long kMaxSamples = 1LL << 25;
 
 // Light, distinct hues; neighbouring entries differ strongly so a greedy pick looks varied.
 const Vec3d kPalette[] = {
@@ -41,8 +43,8 @@ void check_size(int width, int height, int supersample) {
     throw InputError("", "image size " + std::to_string(width) + "x" + std::to_string(height) +
                              " is out of range (1 to " + std::to_string(kMaxSide) + " pixels per side)");
   if (static_cast<long long>(width) * height * supersample * supersample > kMaxSamples)
-    throw InputError("", "image size " + std::to_string(width) + "x" + std::to_string(height) +
-                             " is too large to render");
+    throw InputError(
+        "", "image size " + std::to_string(width) + "x" + std::to_string(height) + " is too large to render");
 }
 
 void check_mesh(const Mesh& mesh) {
@@ -55,7 +57,8 @@ void check_mesh(const Mesh& mesh) {
                                  " out of range (" + std::to_string(nv) + " vertices)");
   for (const Face& f : mesh.faces)
     for (int v : f)
-      if (!is_finite(mesh.positions[v])) throw InputError("", "vertex " + std::to_string(v) + " is not finite");
+      if (!is_finite(mesh.positions[v]))
+        throw InputError("", "vertex " + std::to_string(v) + " is not finite");
 }
 
 void check_uvs(const Mesh& mesh) {
@@ -66,9 +69,10 @@ void check_uvs(const Mesh& mesh) {
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int t : mesh.face_uvs[f]) {
       if (t < 0 || t >= nt)
-        throw InputError("", "face " + std::to_string(f) + " has texture coordinate index " + std::to_string(t) +
-                                 " out of range (" + std::to_string(nt) + ")");
-      if (!is_finite(mesh.uvs[t])) throw InputError("", "texture coordinate " + std::to_string(t) + " is not finite");
+        throw InputError("", "face " + std::to_string(f) + " has texture coordinate index " +
+                                 std::to_string(t) + " out of range (" + std::to_string(nt) + ")");
+      if (!is_finite(mesh.uvs[t]))
+        throw InputError("", "texture coordinate " + std::to_string(t) + " is not finite");
     }
 }
 
@@ -121,7 +125,8 @@ std::vector<Vec3d> corner_normals(const Mesh& mesh, const std::vector<Vec3d>& fn
 struct ViewAngles {
   double azimuth, elevation;  // degrees
 };
-const ViewAngles kViews[8] = {{0, 15}, {90, 15}, {180, 15}, {270, 15}, {0, 90}, {0, -90}, {45, 30}, {225, 30}};
+const ViewAngles kViews[8] = {{0, 15}, {90, 15}, {180, 15}, {270, 15},
+                              {0, 90}, {0, -90}, {45, 30},  {225, 30}};
 
 struct Camera {
   Vec3d eye, right, up, forward;
@@ -163,6 +168,7 @@ struct Shared {
   std::vector<Vec3d> face_normal;
   std::vector<Vec3d> corner_normal;
   std::vector<Vec3d> face_color;  // Shaded / Charts
+  Wrap texture_wrap = Wrap::Repeat;
   Vec3d centre;
   double radius;
   std::vector<char> referenced;
@@ -240,100 +246,91 @@ void render_view(const Shared& s, int view, int x0, int tile_w, Image& out) {
     }
   }
 
-  // Shading pass. Lights are fixed to the camera: a key light from the upper left and a
-  // weaker fill from the right, both from the viewer's side.
+  // Shading pass, one output pixel at a time (its samples shaded and box-filtered), so no
+  // per-sample colour buffer is needed. Lights are fixed to the camera: a key light from the
+  // upper left and a weaker fill from the right, both from the viewer's side.
   const Vec3d key_light = normalized(cam.right * -0.45 + cam.up * 0.55 - cam.forward * 0.7);
   const Vec3d fill_light = normalized(cam.right * 0.6 + cam.up * 0.1 - cam.forward * 0.5);
   const double wire_half_width = 0.5 * ss;  // one output pixel in total, half from each side
-  std::vector<float> rgb(3 * n_samples);
-  std::vector<char> covered(n_samples, 0);
   float texel[64];
   const Image* tex = o.color == ColorMode::Textured ? o.texture : nullptr;
-  for (int y = 0; y < H; ++y) {
-    for (int x = 0; x < W; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * W + x;
-      const int f = fid[i];
-      if (f < 0) continue;
-      covered[i] = 1;
-      const Face& t = mesh.faces[f];
-      const ScreenVertex &a = sv[t[0]], &b = sv[t[1]], &c = sv[t[2]];
-      const double px = x + 0.5, py = y + 0.5;
-      const double area2 = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-      double l[3];
-      l[0] = ((b.x - px) * (c.y - py) - (b.y - py) * (c.x - px)) / area2;
-      l[1] = ((c.x - px) * (a.y - py) - (c.y - py) * (a.x - px)) / area2;
-      l[2] = 1 - l[0] - l[1];
-      // Perspective-correct weights for attributes.
-      double m[3] = {l[0] * a.inv_w, l[1] * b.inv_w, l[2] * c.inv_w};
-      const double msum = m[0] + m[1] + m[2];
-      for (double& w : m) w /= msum;
+  auto shade = [&](int x, int y, int f) {
+    const Face& t = mesh.faces[f];
+    const ScreenVertex &a = sv[t[0]], &b = sv[t[1]], &c = sv[t[2]];
+    const double px = x + 0.5, py = y + 0.5;
+    const double area2 = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    double l[3];
+    l[0] = ((b.x - px) * (c.y - py) - (b.y - py) * (c.x - px)) / area2;
+    l[1] = ((c.x - px) * (a.y - py) - (c.y - py) * (a.x - px)) / area2;
+    l[2] = 1 - l[0] - l[1];
+    // Perspective-correct weights for attributes.
+    double m[3] = {l[0] * a.inv_w, l[1] * b.inv_w, l[2] * c.inv_w};
+    const double msum = m[0] + m[1] + m[2];
+    for (double& w : m) w /= msum;
 
-      Vec3d n = normalized(s.corner_normal[3 * f] * m[0] + s.corner_normal[3 * f + 1] * m[1] +
-                           s.corner_normal[3 * f + 2] * m[2]);
-      if (squared_norm(n) == 0) n = s.face_normal[f];
-      const Vec3d p = mesh.positions[t[0]] * m[0] + mesh.positions[t[1]] * m[1] + mesh.positions[t[2]] * m[2];
-      const Vec3d to_eye = cam.perspective ? normalized(cam.eye - p) : -cam.forward;
-      const bool back = dot(s.face_normal[f], to_eye) < 0;
-      if (dot(n, to_eye) < 0) n = -n;
+    Vec3d n = normalized(s.corner_normal[3 * f] * m[0] + s.corner_normal[3 * f + 1] * m[1] +
+                         s.corner_normal[3 * f + 2] * m[2]);
+    if (squared_norm(n) == 0) n = s.face_normal[f];
+    const Vec3d p = mesh.positions[t[0]] * m[0] + mesh.positions[t[1]] * m[1] + mesh.positions[t[2]] * m[2];
+    const Vec3d to_eye = cam.perspective ? normalized(cam.eye - p) : -cam.forward;
+    const bool back = dot(s.face_normal[f], to_eye) < 0;
+    if (dot(n, to_eye) < 0) n = -n;
 
-      Vec3d base;
-      if (tex) {
-        const auto& uv = mesh.face_uvs[f];
-        const Vec2d q = mesh.uvs[uv[0]] * m[0] + mesh.uvs[uv[1]] * m[1] + mesh.uvs[uv[2]] * m[2];
-        sample_bilinear(*tex, q.x, q.y, texel, Wrap::Repeat);
-        base = tex->channels >= 3 ? Vec3d{texel[0], texel[1], texel[2]} : Vec3d{texel[0], texel[0], texel[0]};
-      } else {
-        base = s.face_color[f];
-      }
-      const double diffuse = 0.22 + 0.66 * std::max(0.0, dot(n, key_light)) + 0.22 * std::max(0.0, dot(n, fill_light));
-      const Vec3d half = normalized(key_light + to_eye);
-      const double specular = 0.12 * std::pow(std::max(0.0, dot(n, half)), 40.0);
-      Vec3d col = base * (diffuse * (back ? 0.6 : 1.0)) + Vec3d{specular, specular, specular};
-
-      if (o.wireframe) {
-        // Distance (in samples) to the nearest edge: barycentric × the opposite altitude.
-        const double twice_area = std::abs(area2);
-        const double e0 = std::hypot(c.x - b.x, c.y - b.y), e1 = std::hypot(a.x - c.x, a.y - c.y),
-                     e2 = std::hypot(b.x - a.x, b.y - a.y);
-        const double d = std::min({l[0] * twice_area / e0, l[1] * twice_area / e1, l[2] * twice_area / e2});
-        if (d < wire_half_width) col = col * 0.15 + kWire * 0.85;
-      }
-      rgb[3 * i] = static_cast<float>(std::clamp(col.x, 0.0, 1.0));
-      rgb[3 * i + 1] = static_cast<float>(std::clamp(col.y, 0.0, 1.0));
-      rgb[3 * i + 2] = static_cast<float>(std::clamp(col.z, 0.0, 1.0));
+    Vec3d base;
+    if (tex) {
+      const auto& uv = mesh.face_uvs[f];
+      const Vec2d q = mesh.uvs[uv[0]] * m[0] + mesh.uvs[uv[1]] * m[1] + mesh.uvs[uv[2]] * m[2];
+      sample_bilinear(*tex, q.x, q.y, texel, s.texture_wrap);
+      base = tex->channels >= 3 ? Vec3d{texel[0], texel[1], texel[2]} : Vec3d{texel[0], texel[0], texel[0]};
+    } else {
+      base = s.face_color[f];
     }
-  }
+    const double diffuse =
+        0.22 + 0.66 * std::max(0.0, dot(n, key_light)) + 0.22 * std::max(0.0, dot(n, fill_light));
+    const Vec3d half = normalized(key_light + to_eye);
+    const double specular = 0.12 * std::pow(std::max(0.0, dot(n, half)), 40.0);
+    Vec3d col = base * (diffuse * (back ? 0.6 : 1.0)) + Vec3d{specular, specular, specular};
 
-  // Box-filter the samples into the output pixels.
+    if (o.wireframe) {
+      // Distance (in samples) to the nearest edge: barycentric × the opposite altitude.
+      const double twice_area = std::abs(area2);
+      const double e0 = std::hypot(c.x - b.x, c.y - b.y), e1 = std::hypot(a.x - c.x, a.y - c.y),
+                   e2 = std::hypot(b.x - a.x, b.y - a.y);
+      const double d = std::min({l[0] * twice_area / e0, l[1] * twice_area / e1, l[2] * twice_area / e2});
+      if (d < wire_half_width) col = col * 0.15 + kWire * 0.85;
+    }
+    return Vec3d{std::clamp(col.x, 0.0, 1.0), std::clamp(col.y, 0.0, 1.0), std::clamp(col.z, 0.0, 1.0)};
+  };
+
   const int nc = out.channels;
+  const double total = ss * ss;
   for (int y = 0; y < out.height; ++y) {
     for (int x = 0; x < tile_w; ++x) {
-      float sum[3] = {0, 0, 0};
+      Vec3d sum;
       int hits = 0;
       for (int sy = 0; sy < ss; ++sy)
         for (int sx = 0; sx < ss; ++sx) {
-          const std::size_t i = static_cast<std::size_t>(y * ss + sy) * W + (x * ss + sx);
-          if (!covered[i]) continue;
+          const int X = x * ss + sx, Y = y * ss + sy;
+          const int f = fid[static_cast<std::size_t>(Y) * W + X];
+          if (f < 0) continue;
           ++hits;
-          for (int k = 0; k < 3; ++k) sum[k] += rgb[3 * i + k];
+          sum += shade(X, Y, f);
         }
-      const float total = static_cast<float>(ss * ss);
-      for (int k = 0; k < 3; ++k) {
-        float v;
-        if (o.transparent)  // straight alpha: the colour of the covered part
-          v = hits > 0 ? sum[k] / hits : 1.0f;
-        else  // over white
-          v = (sum[k] + (total - hits)) / total;
-        out.at(x0 + x, y, k) = v;
-      }
-      if (nc == 4) out.at(x0 + x, y, 3) = hits / total;
+      // Straight alpha: a transparent image keeps the colour of the covered part; an opaque
+      // one is composited over white.
+      const Vec3d col = o.transparent ? (hits > 0 ? sum / hits : Vec3d{1, 1, 1})
+                                      : (sum + Vec3d{1, 1, 1} * (total - hits)) / total;
+      out.at(x0 + x, y, 0) = static_cast<float>(col.x);
+      out.at(x0 + x, y, 1) = static_cast<float>(col.y);
+      out.at(x0 + x, y, 2) = static_cast<float>(col.z);
+      if (nc == 4) out.at(x0 + x, y, 3) = static_cast<float>(hits / total);
     }
   }
 }
 
 // Anti-aliased segment into an RGB sample buffer: coverage falls off over one sample.
-void draw_segment(std::vector<float>& buf, int W, int H, Vec2d a, Vec2d b, double half_width, const Vec3d& col,
-                  double alpha) {
+void draw_segment(std::vector<float>& buf, int W, int H, Vec2d a, Vec2d b, double half_width,
+                  const Vec3d& col, double alpha) {
   const double r = half_width + 1;
   const int xa = std::max(0, static_cast<int>(std::floor(std::min(a.x, b.x) - r)));
   const int xb = std::min(W - 1, static_cast<int>(std::ceil(std::max(a.x, b.x) + r)));
@@ -365,7 +362,8 @@ std::vector<Vec3d> chart_colors(const Mesh& mesh, const std::vector<int>& face_c
                              std::to_string(mesh.faces.size()));
   for (int c : face_chart)
     if (c < 0 || c >= num_charts)
-      throw InputError("", "chart id " + std::to_string(c) + " out of range (" + std::to_string(num_charts) + " charts)");
+      throw InputError(
+          "", "chart id " + std::to_string(c) + " out of range (" + std::to_string(num_charts) + " charts)");
   std::vector<std::pair<int, int>> adjacent;
   const Topology topo(mesh);
   for (int e = 0; e < topo.num_edges(); ++e) {
@@ -402,13 +400,14 @@ std::vector<Vec3d> chart_colors(const Mesh& mesh, const std::vector<int>& face_c
 
 Image render_mesh(const Mesh& mesh, const RenderOptions& options) {
   const RenderOptions& o = options;
-  if (o.views < 1 || o.views > 8) throw InputError("", "views must be between 1 and 8, not " + std::to_string(o.views));
+  if (o.views < 1 || o.views > 8)
+    throw InputError("", "views must be between 1 and 8, not " + std::to_string(o.views));
   if (o.supersample < 1 || o.supersample > 4)
     throw InputError("", "supersample must be between 1 and 4, not " + std::to_string(o.supersample));
   check_size(o.width, o.height, o.supersample);
   if (o.width < o.views)
-    throw InputError("", "image width " + std::to_string(o.width) + " is too small for " + std::to_string(o.views) +
-                             " views");
+    throw InputError("", "image width " + std::to_string(o.width) + " is too small for " +
+                             std::to_string(o.views) + " views");
   check_mesh(mesh);
 
   Shared s;
@@ -442,15 +441,16 @@ Image render_mesh(const Mesh& mesh, const RenderOptions& options) {
         ids = o.face_charts;
       } else if (!mesh.face_groups.empty()) {
         if (mesh.face_groups.size() != mesh.faces.size())
-          throw InputError("", "mesh has face groups for " + std::to_string(mesh.face_groups.size()) + " of " +
-                                   std::to_string(nf) + " faces");
+          throw InputError("", "mesh has face groups for " + std::to_string(mesh.face_groups.size()) +
+                                   " of " + std::to_string(nf) + " faces");
         ids = mesh.face_groups;
       } else if (mesh.has_uvs()) {
         check_uvs(mesh);
         int n = 0;
         ids = uv_charts(mesh, n);
       } else {
-        throw InputError("", "colouring by chart needs face groups or texture coordinates; the mesh has neither");
+        throw InputError("",
+                         "colouring by chart needs face groups or texture coordinates; the mesh has neither");
       }
       int n = 0;
       const std::vector<int> chart = compact_ids(ids, n);
@@ -460,10 +460,18 @@ Image render_mesh(const Mesh& mesh, const RenderOptions& options) {
       break;
     }
     case ColorMode::Textured:
-      if (!mesh.has_uvs()) throw InputError("", "textured rendering needs texture coordinates; the mesh has none");
+      if (!mesh.has_uvs())
+        throw InputError("", "textured rendering needs texture coordinates; the mesh has none");
       check_uvs(mesh);
       if (!o.texture || o.texture->empty()) throw InputError("", "textured rendering needs a texture image");
       if (o.texture->channels > 64) throw InputError("", "texture has too many channels");
+      {
+        // An atlas (all UVs in the unit square) must not bleed across the texture's borders;
+        // anything else is taken as a tiling texture.
+        bool unit = true;
+        for (const Vec2d& uv : mesh.uvs) unit = unit && uv.x >= 0 && uv.x <= 1 && uv.y >= 0 && uv.y <= 1;
+        s.texture_wrap = unit ? Wrap::Clamp : Wrap::Repeat;
+      }
       break;
   }
 
@@ -534,7 +542,8 @@ Image render_uv_layout(const Mesh& mesh, int width, int height) {
   }
   if (unit_square) {
     const Vec2d corners[4] = {to_px({0, 0}), to_px({1, 0}), to_px({1, 1}), to_px({0, 1})};
-    for (int i = 0; i < 4; ++i) draw_segment(buf, W, H, corners[i], corners[(i + 1) % 4], 0.5 * ss, {0.6, 0.6, 0.6}, 1);
+    for (int i = 0; i < 4; ++i)
+      draw_segment(buf, W, H, corners[i], corners[(i + 1) % 4], 0.5 * ss, {0.6, 0.6, 0.6}, 1);
   }
 
   // Edges: inside a chart thin and faint (fainter when triangles are only a few pixels big,
@@ -559,7 +568,8 @@ Image render_uv_layout(const Mesh& mesh, int width, int height) {
       const IndexRange faces = topo.edge_faces(topo.face_edge(f, k));
       int other = -1;
       if (faces.size() == 2) other = faces[0] == f ? faces[1] : faces[0];
-      const Vec2d a = to_px(mesh.uvs[mesh.face_uvs[f][k]]), b = to_px(mesh.uvs[mesh.face_uvs[f][(k + 1) % 3]]);
+      const Vec2d a = to_px(mesh.uvs[mesh.face_uvs[f][k]]),
+                  b = to_px(mesh.uvs[mesh.face_uvs[f][(k + 1) % 3]]);
       const bool inner = other >= 0 && chart[other] == chart[f] && same_uv_across(f, k, other);
       if (!inner) {
         boundary.push_back({a, b});
@@ -577,7 +587,8 @@ Image render_uv_layout(const Mesh& mesh, int width, int height) {
       for (int k = 0; k < 3; ++k) {
         float sum = 0;
         for (int sy = 0; sy < ss; ++sy)
-          for (int sx = 0; sx < ss; ++sx) sum += buf[3 * (static_cast<std::size_t>(y * ss + sy) * W + x * ss + sx) + k];
+          for (int sx = 0; sx < ss; ++sx)
+            sum += buf[3 * (static_cast<std::size_t>(y * ss + sy) * W + x * ss + sx) + k];
         out.at(x, y, k) = sum * norm_factor;
       }
   return out;

@@ -1,8 +1,7 @@
 #include "isochart/builtin.h"
 
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <map>
 #include <string>
@@ -25,8 +24,7 @@ const Mesh& builtin(const std::string& name) {
 
 double signed_volume(const Mesh& m) {
   double v = 0;
-  for (const Face& f : m.faces)
-    v += dot(m.positions[f[0]], cross(m.positions[f[1]], m.positions[f[2]])) / 6;
+  for (const Face& f : m.faces) v += dot(m.positions[f[0]], cross(m.positions[f[1]], m.positions[f[2]])) / 6;
   return v;
 }
 
@@ -133,7 +131,8 @@ TEST_CASE("builtin creature has protruding head, ears, legs and tail", "[builtin
   for (const Vec3d& p : m.positions) {
     const bool under_belly = p.y < -0.6 && std::abs(p.x) < 0.25;
     const bool between_left_and_right = p.y < -0.6 && std::abs(p.z) < 0.08;
-    if (under_belly || between_left_and_right) FAIL("surface point between the legs at " << p.x << ", " << p.y << ", " << p.z);
+    if (under_belly || between_left_and_right)
+      FAIL("surface point between the legs at " << p.x << ", " << p.y << ", " << p.z);
   }
 }
 

@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -31,7 +30,9 @@ struct TempDir {
     fs::remove_all(path, ec);
   }
   std::string file(const std::string& name) const { return (path / name).string(); }
-  int entries() const { return static_cast<int>(std::distance(fs::directory_iterator(path), fs::directory_iterator())); }
+  int entries() const {
+    return static_cast<int>(std::distance(fs::directory_iterator(path), fs::directory_iterator()));
+  }
 };
 
 // Values on the 8-bit grid (k/255) so a PNG round trip is exact.
@@ -39,7 +40,8 @@ Image gradient_image(int w, int h, int c) {
   Image img(w, h, c);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
-      for (int k = 0; k < c; ++k) img.at(x, y, k) = static_cast<float>(((x * 37 + y * 11 + k * 85) % 256) / 255.0);
+      for (int k = 0; k < c; ++k)
+        img.at(x, y, k) = static_cast<float>(((x * 37 + y * 11 + k * 85) % 256) / 255.0);
   return img;
 }
 
@@ -56,7 +58,8 @@ TEST_CASE("PNG round trip keeps size, channels and 8-bit values", "[image]") {
     REQUIRE(b.height == 5);
     REQUIRE(b.channels == channels);
     double worst = 0;
-    for (std::size_t i = 0; i < a.pixels.size(); ++i) worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
+    for (std::size_t i = 0; i < a.pixels.size(); ++i)
+      worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
     CHECK(worst < 1e-6);
     // Rows are stored top first: pixel (6, 0) keeps its value.
     CHECK(b.at(6, 0, 0) == Approx(a.at(6, 0, 0)).margin(1e-6));
@@ -153,12 +156,15 @@ TEST_CASE("read_image errors name the file", "[image]") {
   SECTION("truncated image") {
     const std::string path = dir.file("big.png");
     Image img(64, 64, 3);
-    for (std::size_t i = 0; i < img.pixels.size(); ++i) img.pixels[i] = static_cast<float>((i * 7919) % 256) / 255;
+    for (std::size_t i = 0; i < img.pixels.size(); ++i)
+      img.pixels[i] = static_cast<float>((i * 7919) % 256) / 255;
     write_image(path, img);
     fs::resize_file(path, fs::file_size(path) / 2);
     CHECK_THROWS_AS(read_image(path), InputError);
   }
-  SECTION("directory") { CHECK_THROWS_AS(read_image(dir.path.string()), InputError); }
+  SECTION("directory") {
+    CHECK_THROWS_AS(read_image(dir.path.string()), InputError);
+  }
 }
 
 TEST_CASE("bilinear lookup", "[image]") {

@@ -1,11 +1,10 @@
 #include "isochart/render.h"
 
 #include <sys/wait.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
-#include <tbb/task_arena.h>
-
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -321,7 +320,8 @@ TEST_CASE("isocharts render writes the image and reports it", "[render][cli]") {
   const std::string out = (dir / "views.png").string();
   const std::string cli = ISOCHARTS_CLI;
   auto run = [&](const std::string& args) {
-    const int status = std::system((cli + " " + args + " > " + (dir / "stdout.txt").string() + " 2>&1").c_str());
+    const int status =
+        std::system((cli + " " + args + " > " + (dir / "stdout.txt").string() + " 2>&1").c_str());
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   };
   CHECK(run("render builtin:sphere -o " + out + " --views 2 --width 120 --height 50 --json") == 0);

@@ -20,7 +20,9 @@ struct Image {
   Image() = default;
   /// An image filled with `value` in every channel.
   Image(int width_, int height_, int channels_, float value = 0.0f)
-      : width(width_), height(height_), channels(channels_),
+      : width(width_),
+        height(height_),
+        channels(channels_),
         pixels(static_cast<std::size_t>(width_) * height_ * channels_, value) {}
 
   bool empty() const { return pixels.empty(); }

@@ -40,14 +40,18 @@ struct RenderOptions {
 /// z-buffered triangles, Lambert shading from a key and a fill light plus ambient and a
 /// little specular, smooth normals except across creases sharper than 60°, back faces lit
 /// like front faces but darker. Textured mode uses perspective-correct UV interpolation.
-/// \throw InputError for invalid options (size, views, supersample), an empty mesh, or a
-///        colour mode the mesh cannot provide (no charts, no UVs, no texture).
+/// Textures are looked up with clamping when every UV lies in [0, 1] (an atlas), repeating
+/// otherwise.
+/// \throw InputError for invalid options (views, supersample, or a size beyond 16384 per side
+///        or 2^25 samples = width × height × supersample²), an empty mesh, indices out of
+///        range, or a colour mode the mesh cannot provide (no charts, no UVs, no texture).
 Image render_mesh(const Mesh& mesh, const RenderOptions& options = {});
 
 /// Draws the atlas in texture space into an RGB image of width × height pixels on white:
 /// each UV chart filled in its colour, triangle edges thin and slightly darker, chart
 /// boundaries dark. The [0, 1]² texture square is shown (framed in grey) when every UV lies
 /// inside it; otherwise the UV bounding box fills the image. Aspect ratio is preserved.
+/// Rendered with 2×2 supersampling, so width × height is limited to 2^23 pixels.
 /// \throw InputError if the mesh has no UVs or the size is invalid.
 Image render_uv_layout(const Mesh& mesh_with_uvs, int width, int height);
 
