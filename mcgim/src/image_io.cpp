@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "isochart/error.h"
+#include "isochart/image.h"
 
 namespace mcgim {
 
@@ -72,22 +73,16 @@ void write_exr(const GeometryImage& im, const std::string& path) {
 
 void write_normal_preview(const GeometryImage& im, const std::string& path) {
   const int W = im.width, H = im.height;
-  OIIO::ImageSpec spec(W, H, 3, OIIO::TypeDesc::UINT8);
-  std::vector<unsigned char> px(static_cast<std::size_t>(W) * H * 3, 0);
-  auto to8 = [](double v) {
-    const double c = std::min(std::max((v + 1.0) * 0.5, 0.0), 1.0);
-    return static_cast<unsigned char>(c * 255.0 + 0.5);
-  };
+  isochart::Image out(W, H, 3, 0.0f);
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
       const int i = im.index(x, y);
       if (!im.defined(i)) continue;
-      unsigned char* p = &px[(static_cast<std::size_t>(H - 1 - y) * W + x) * 3];
-      p[0] = to8(im.normals[i].x);
-      p[1] = to8(im.normals[i].y);
-      p[2] = to8(im.normals[i].z);
+      // Image rows run top to bottom; sample row 0 is the bottom (v = 0).
+      for (int c = 0; c < 3; ++c)
+        out.at(x, H - 1 - y, c) = static_cast<float>(0.5 * (im.normals[i][c] + 1.0));
     }
-  write_pixels(path, spec, px, OIIO::TypeDesc::UINT8);
+  isochart::write_image(path, out);
 }
 
 }  // namespace mcgim

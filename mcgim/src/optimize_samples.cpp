@@ -154,7 +154,7 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
     // preconditioned conjugate gradients from the current positions converge in a few dozen
     // iterations (a direct factorization fills in badly on image-sized grids).
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> solver;
-    solver.setTolerance(1e-10);
+    solver.setTolerance(1e-8);
     solver.setMaxIterations(200);
     solver.compute(A);
     Eigen::MatrixXd x0(nv, 3);

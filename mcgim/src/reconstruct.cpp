@@ -99,31 +99,32 @@ Remesh reconstruct(const GeometryImage& im) {
   // with opposite orientations: a closed pocket of two faces hanging on an edge. Removing both
   // faces removes the pocket (and leaves the surface manifold).
   {
-    std::vector<std::array<int, 4>> keys;  // rotated group triple + triangle index
-    keys.reserve(tris.size());
-    for (std::size_t i = 0; i < tris.size(); ++i) {
+    // Triangles bucketed by their smallest group (counting sort), then compared in buckets.
+    const int nt = static_cast<int>(tris.size());
+    std::vector<std::array<int, 3>> rot(nt);
+    std::vector<int> offset(im.num_groups + 1, 0);
+    for (int i = 0; i < nt; ++i) {
       std::array<int, 3> g = {im.group[tris[i][0]], im.group[tris[i][1]], im.group[tris[i][2]]};
       std::rotate(g.begin(), std::min_element(g.begin(), g.end()), g.end());
-      keys.push_back({g[0], std::min(g[1], g[2]), std::max(g[1], g[2]), static_cast<int>(i)});
+      rot[i] = g;
+      ++offset[g[0] + 1];
     }
-    std::sort(keys.begin(), keys.end());
-    std::vector<char> drop(tris.size(), 0);
-    for (std::size_t i = 0; i < keys.size();) {
-      std::size_t j = i;
-      while (j < keys.size() && keys[j][0] == keys[i][0] && keys[j][1] == keys[i][1] && keys[j][2] == keys[i][2]) ++j;
-      // Pair faces of opposite orientation within the run.
-      std::vector<int> pos, neg;
-      for (std::size_t k = i; k < j; ++k) {
-        const auto& t = tris[keys[k][3]];
-        std::array<int, 3> g = {im.group[t[0]], im.group[t[1]], im.group[t[2]]};
-        std::rotate(g.begin(), std::min_element(g.begin(), g.end()), g.end());
-        (g[1] < g[2] ? pos : neg).push_back(keys[k][3]);
-      }
-      for (std::size_t k = 0; k < std::min(pos.size(), neg.size()); ++k) drop[pos[k]] = drop[neg[k]] = 1;
-      i = j;
+    for (int g = 0; g < im.num_groups; ++g) offset[g + 1] += offset[g];
+    std::vector<int> bucket(nt), fill(offset.begin(), offset.end() - 1);
+    for (int i = 0; i < nt; ++i) bucket[fill[rot[i][0]]++] = i;
+    std::vector<char> drop(nt, 0);
+    for (int g = 0; g < im.num_groups; ++g) {
+      const int lo = offset[g], hi = offset[g + 1];
+      for (int x = lo; x < hi; ++x)
+        for (int y = x + 1; y < hi; ++y) {
+          const auto& p = rot[bucket[x]];
+          const auto& q = rot[bucket[y]];
+          if (drop[bucket[x]] || drop[bucket[y]] || p[1] != q[2] || p[2] != q[1]) continue;
+          drop[bucket[x]] = drop[bucket[y]] = 1;
+        }
     }
     std::size_t out = 0;
-    for (std::size_t i = 0; i < tris.size(); ++i) {
+    for (int i = 0; i < nt; ++i) {
       if (drop[i]) {
         ++r.pocket_faces;
         continue;
@@ -140,17 +141,25 @@ Remesh reconstruct(const GeometryImage& im) {
   // with the most faces.
   {
     const int nt = static_cast<int>(tris.size());
-    std::vector<std::array<int, 3>> edges;  // (group a, group b, triangle), a < b
-    edges.reserve(3 * tris.size());
+    // Undirected edges bucketed by their smaller group: (larger group, triangle).
+    std::vector<int> offset(im.num_groups + 1, 0);
+    for (int i = 0; i < nt; ++i)
+      for (int k = 0; k < 3; ++k)
+        ++offset[std::min(im.group[tris[i][k]], im.group[tris[i][(k + 1) % 3]]) + 1];
+    for (int g = 0; g < im.num_groups; ++g) offset[g + 1] += offset[g];
+    std::vector<std::pair<int, int>> edges(offset.back());
+    std::vector<int> fill(offset.begin(), offset.end() - 1);
     for (int i = 0; i < nt; ++i)
       for (int k = 0; k < 3; ++k) {
         const int a = im.group[tris[i][k]], b = im.group[tris[i][(k + 1) % 3]];
-        edges.push_back({std::min(a, b), std::max(a, b), i});
+        edges[fill[std::min(a, b)]++] = {std::max(a, b), i};
       }
-    std::sort(edges.begin(), edges.end());
     detail::UnionFind pieces(nt);
-    for (std::size_t i = 1; i < edges.size(); ++i)
-      if (edges[i][0] == edges[i - 1][0] && edges[i][1] == edges[i - 1][1]) pieces.unite(edges[i][2], edges[i - 1][2]);
+    for (int g = 0; g < im.num_groups; ++g) {
+      std::sort(edges.begin() + offset[g], edges.begin() + offset[g + 1]);
+      for (int x = offset[g] + 1; x < offset[g + 1]; ++x)
+        if (edges[x].first == edges[x - 1].first) pieces.unite(edges[x].second, edges[x - 1].second);
+    }
     std::vector<int> piece_faces(nt, 0);
     for (int i = 0; i < nt; ++i) ++piece_faces[pieces.find(i)];
     // Pieces sharing a vertex: cluster them through the groups.
@@ -165,8 +174,8 @@ Remesh reconstruct(const GeometryImage& im) {
     std::vector<int> best(nt, -1);
     for (int i = 0; i < nt; ++i) {
       const int p = pieces.find(i), c = clusters.find(p);
-      int& b = best[c];
-      if (b < 0 || piece_faces[p] > piece_faces[b] || (piece_faces[p] == piece_faces[b] && p < b)) b = p;
+      int& bp = best[c];
+      if (bp < 0 || piece_faces[p] > piece_faces[bp] || (piece_faces[p] == piece_faces[bp] && p < bp)) bp = p;
     }
     std::size_t out = 0;
     for (int i = 0; i < nt; ++i) {

@@ -1,14 +1,18 @@
 #include "mcgim/mcgim.h"
 
+#include <OpenImageIO/imageio.h>
 #include <tbb/global_control.h>
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <string>
 
 #include "isochart/error.h"
+#include "isochart/image.h"
 #include "isochart/mesh.h"
+#include "mcgim/image_io.h"
 #include "mcgim/psnr.h"
 #include "synthetic_atlases.h"
 
@@ -183,4 +187,48 @@ TEST_CASE("the resolution search reaches the sample budget", "[mcgim]") {
     o.width = o.height = c.width;
     CHECK(std::abs(build_level(m, o).stats.defined_samples - target) < 0.06 * target);
   }
+}
+
+TEST_CASE("geometry images are written as EXR and PNG", "[mcgim][io]") {
+  const Level lv = build_level(mcgim_test::sphere_atlas(12, 24), keep_layout(32));
+  const std::string dir = std::filesystem::temp_directory_path() / "mcgim_io_test";
+  std::filesystem::create_directories(dir);
+  const std::string exr = dir + "/gim.exr", png = dir + "/gim.png";
+  write_exr(lv.image, exr);
+  write_normal_preview(lv.image, png);
+  auto in = OIIO::ImageInput::open(exr);
+  REQUIRE(in);
+  const OIIO::ImageSpec& spec = in->spec();
+  CHECK(spec.width == 32);
+  CHECK(spec.height == 32);
+  REQUIRE(spec.nchannels == 9);
+  // EXR keeps channels sorted by name: look them up.
+  auto channel = [&](const std::string& name) {
+    for (int c = 0; c < spec.nchannels; ++c)
+      if (spec.channelnames[c] == name) return c;
+    return -1;
+  };
+  const int cx = channel("R"), cdef = channel("defined"), cchart = channel("chart"), cgroup = channel("group");
+  REQUIRE(cx >= 0);
+  REQUIRE(cdef >= 0);
+  REQUIRE(cchart >= 0);
+  REQUIRE(cgroup >= 0);
+  REQUIRE(channel("N.Z") >= 0);
+  std::vector<float> px(32 * 32 * 9);
+  REQUIRE(in->read_image(0, 0, 0, 9, OIIO::TypeDesc::FLOAT, px.data()));
+  in->close();
+  int mismatches = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const int i = lv.image.index(x, y);
+      const float* p = &px[((31 - y) * 32 + x) * 9];  // file rows run top down
+      if (p[cdef] != (lv.image.defined(i) ? 1.0f : 0.0f) || p[cchart] != float(lv.image.chart[i]) ||
+          p[cx] != float(lv.image.positions[i].x) || p[cgroup] != float(lv.image.defined(i) ? lv.image.group[i] : -1))
+        ++mismatches;
+    }
+  CHECK(mismatches == 0);
+  const isochart::Image preview = isochart::read_image(png);
+  CHECK(preview.width == 32);
+  CHECK(preview.channels == 3);
+  std::filesystem::remove_all(dir);
 }
