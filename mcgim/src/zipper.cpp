@@ -185,8 +185,17 @@ ChartZip zip_chart(const AtlasCharts& a, const Placement& pl, int c, const std::
   std::vector<int> order(n);
   for (int k = 0; k < n; ++k) order[k] = k;
   std::stable_sort(order.begin(), order.end(), [&](int x, int y) { return node_r[x] < node_r[y]; });
+  // A cut between two points of the mesh boundary must keep two distinct samples on each
+  // side: contracting it would pinch the boundary (two holes touching at a vertex).
+  auto keep_apart = [&](int k) {
+    const Side& before = a.sides[ch.sides[(k + n - 1) % n]];
+    const CutPath& p = a.paths[before.path];
+    return p.side_b >= 0 && a.topology.is_boundary_vertex(p.vertices.front()) &&
+           a.topology.is_boundary_vertex(p.vertices.back());
+  };
   std::vector<int> assigned(n, 0);
   int prev = 0;
+  bool first_node = true;
   for (int k : order) {
     const double rn = node_r[k];
     // Largest u in [0, m-1] with r_at(u) <= rn; r is non-decreasing and r[0] = 0 <= rn.
@@ -197,8 +206,10 @@ ChartZip zip_chart(const AtlasCharts& a, const Placement& pl, int c, const std::
     const double d1 = squared_norm(ring_pts[(rotation + u + 1) % m] - node_pt);
     int choice = d1 < d0 ? u + 1 : u;
     choice = std::max(choice, prev);
+    if (!first_node && n > 1 && keep_apart(k) && choice == prev && prev + 1 <= m) ++choice;
     assigned[k] = choice;
     prev = choice;
+    first_node = false;
   }
   const int last_in_order = order.back();
   for (int k = 0; k < n; ++k) {

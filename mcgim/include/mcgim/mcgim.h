@@ -32,10 +32,10 @@ struct LevelOptions {
   /// zippering: a least-squares fit of the reconstructed surface to points of the original
   /// surface at their texture positions, with a pull towards the sampled positions.
   bool optimize = true;
-  int optimize_iterations = 2;  ///< fit passes (each re-picks the diagonals and refits)
+  int optimize_iterations = 1;  ///< fit passes (each re-picks the diagonals and refits)
   /// Weight of the pull towards the sampled positions, relative to the fit, per unit of
   /// texel area. Small values fit harder; it keeps samples without data in place.
-  double optimize_regularization = 0.05;
+  double optimize_regularization = 0.02;
 };
 
 /// What one level measured. Seconds are wall time per stage.
