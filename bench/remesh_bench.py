@@ -22,7 +22,7 @@ import sys
 import time
 
 PAPER_TABLE_II = {"horse": 88.7, "gargoyle": 85.6, "feline": 82.9}
-STAGES = ["packing", "sampling", "zippering", "reconstruction", "optimization"]
+STAGES = ["charts", "packing", "sampling", "zippering", "reconstruction", "optimization"]
 
 
 def run(cli, args, report, threads):

@@ -78,8 +78,12 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
 
 Level build_level(const isochart::Mesh& atlas, const LevelOptions& options, const isochart::Progress& progress) {
   check_options(options);
+  const auto t0 = Clock::now();
   const detail::AtlasCharts a = detail::prepare_atlas(atlas);
-  return build_prepared(a, options, progress);
+  const double seconds = since(t0);
+  Level lv = build_prepared(a, options, progress);
+  lv.stats.seconds_charts = seconds;
+  return lv;
 }
 
 std::vector<Level> build_pyramid(const isochart::Mesh& atlas, const PyramidOptions& options,
@@ -96,18 +100,21 @@ std::vector<Level> build_pyramid(const isochart::Mesh& atlas, const PyramidOptio
     o.height = s[1];
     check_options(o);
   }
+  const auto t0 = Clock::now();
   const detail::AtlasCharts a = detail::prepare_atlas(atlas);
+  const double seconds = since(t0);
   std::vector<Level> levels;
   for (const auto& s : sizes) {
     o.width = s[0];
     o.height = s[1];
     levels.push_back(build_prepared(a, o, progress));
   }
+  levels.front().stats.seconds_charts = seconds;
   for (std::size_t l = 0; l + 1 < levels.size(); ++l) {
-    const auto t0 = Clock::now();
+    const auto tc = Clock::now();
     levels[l].coarser = shoot_normals(levels[l].image, levels[l + 1].image, levels[l + 1].remesh,
                                       options.shoot, progress);
-    levels[l].stats.seconds_correspondence = since(t0);
+    levels[l].stats.seconds_correspondence = since(tc);
   }
   return levels;
 }
@@ -131,23 +138,18 @@ ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target
     }
     return n;
   };
-  // Coverage grows about with the square of the resolution: iterate on that model, then
-  // probe the neighbours of the best resolution found.
+  // Coverage grows about with the square of the resolution (the packer fills a similar
+  // fraction of any size): iterate on that model until within 1% of the budget. Each trial
+  // packs the atlas, which can be slow for thousands of charts, so trials are few.
   int res = std::clamp(static_cast<int>(std::lround(std::sqrt(target / 0.6))), 4, 16384);
   std::vector<int> tried;
-  for (int it = 0; it < 6; ++it) {
+  for (int it = 0; it < 5; ++it) {
     if (std::find(tried.begin(), tried.end(), res) != tried.end()) break;
     tried.push_back(res);
     const long long n = trial(res);
+    if (std::llabs(n - target) <= target / 100) break;
     const double scale = n > 0 ? std::sqrt(static_cast<double>(target) / n) : 2.0;
     res = std::clamp(static_cast<int>(std::lround(res * scale)), 4, 16384);
-  }
-  for (int d : {-1, 1}) {
-    const int r = best.width + d;
-    if (r >= 4 && r <= 16384 && std::find(tried.begin(), tried.end(), r) == tried.end()) {
-      tried.push_back(r);
-      trial(r);
-    }
   }
   return best;
 }

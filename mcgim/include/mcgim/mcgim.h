@@ -58,6 +58,9 @@ struct LevelStats {
   int input_euler_characteristic = 0;
   int input_boundary_loops = 0;
   double texel_size = 0;      ///< sqrt(surface area / defined samples), model units
+  /// Splitting the atlas into charts and building the cut graph (done once per atlas: in a
+  /// pyramid it is counted on the finest level only).
+  double seconds_charts = 0;
   double seconds_packing = 0, seconds_sampling = 0, seconds_zippering = 0,
          seconds_reconstruction = 0, seconds_optimization = 0, seconds_correspondence = 0;
 };
