@@ -445,6 +445,7 @@ ZipperStats zipper(const AtlasCharts& a, const Placement& pl, Sampling& sm,
     // A path whose two ends fell into one group (a short path elsewhere was contracted) must
     // keep at least two distinct groups inside on each side, or its two halves would become
     // one edge with four faces: contract it too. Repeat, as this can close other such loops.
+    // (Node groups are found through the node ids N + vertex; any member works for unite.)
     for (bool again = true; again;) {
       again = false;
       for (const CutPath& p : a.paths) {
@@ -471,6 +472,29 @@ ZipperStats zipper(const AtlasCharts& a, const Placement& pl, Sampling& sm,
         }
         again = true;
       }
+      // Likewise two cut paths reduced to the same single edge (no group between their ends)
+      // would give that edge four faces: contract that edge.
+      std::vector<std::array<int, 2>> single;
+      for (const CutPath& p : a.paths) {
+        if (p.side_b < 0) continue;
+        const int gs = uf.find(N + p.vertices.front()), ge = uf.find(N + p.vertices.back());
+        if (gs == ge) continue;
+        const Chain* ch = chain_of(p.side_a);
+        if (!ch) ch = chain_of(p.side_b);
+        if (!ch) continue;
+        bool inner = false;
+        for (int smp : ch->samples) {
+          const int g = uf.find(smp);
+          inner = inner || (g != gs && g != ge);
+        }
+        if (!inner) single.push_back({std::min(gs, ge), std::max(gs, ge)});
+      }
+      std::sort(single.begin(), single.end());
+      for (std::size_t i = 1; i < single.size(); ++i)
+        if (single[i] == single[i - 1] && uf.find(single[i][0]) != uf.find(single[i][1])) {
+          uf.unite(single[i][0], single[i][1]);
+          again = true;
+        }
     }
     // A chart whose ring now spans fewer than three groups would close up into a pocket
     // (its boundary contracted without its interior, e.g. an island chart in a hole too small
