@@ -623,9 +623,9 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
       for (int y = y0; y <= y1; ++y)
         for (int x = x0; x <= x1; ++x) {
           Vec3d unused;
-          // A texel touches the triangle when the triangle comes within its square: test the
-          // distance from the texel centre against the square's half-diagonal, then exactly.
-          if (closest_on_triangle(Vec2d(x + 0.5, y + 0.5), p0, p1, p2, unused) > 0.5 + 1e-12 &&
+          // Within half a texel of the centre the square is surely touched; otherwise test
+          // exactly (closest_on_triangle returns a squared distance).
+          if (closest_on_triangle(Vec2d(x + 0.5, y + 0.5), p0, p1, p2, unused) > 0.25 &&
               !triangle_touches_square(p0, p1, p2, x, y))
             continue;
           cand.push_back(im.index(x, y));

@@ -232,3 +232,51 @@ TEST_CASE("geometry images are written as EXR and PNG", "[mcgim][io]") {
   CHECK(preview.channels == 3);
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("sample centres on shared edges and vertices are defined once, without gaps", "[mcgim]") {
+  // A flat square whose triangle corners all sit exactly on sample centres of a 32×32 image
+  // (odd multiples of 1/64), so many centres lie on edges and vertices shared by triangles.
+  isochart::Mesh m;
+  const int n = 12;  // quads per side, two samples wide each
+  auto coord = [](int i) { return (9.0 + 4.0 * i) / 64.0; };
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.positions.push_back({coord(i), coord(j), 0.0});
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      // Alternate the diagonal so that both diagonal directions occur.
+      if ((i + j) % 2 == 0) {
+        m.faces.push_back({a, b, c});
+        m.faces.push_back({a, c, d});
+      } else {
+        m.faces.push_back({a, b, d});
+        m.faces.push_back({b, c, d});
+      }
+    }
+  for (const auto& p : m.positions) m.uvs.push_back({p.x, p.y});
+  m.face_uvs = m.faces;
+  m.face_groups.assign(m.faces.size(), 0);
+  const Level lv = build_level(m, keep_layout(32, false));
+  const GeometryImage& im = lv.image;
+  int missing = 0, wrong = 0;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const double u = (x + 0.5) / 32, v = (y + 0.5) / 32;
+      const bool inside = u > coord(0) && u < coord(n) && v > coord(0) && v < coord(n);
+      const int i = im.index(x, y);
+      if (inside && !im.defined(i)) ++missing;
+      if (!im.defined(i)) continue;
+      // Samples inside the chart sit exactly where their texture position says (the map is
+      // the identity); zippered boundary samples (an undefined 4-neighbour) lie on the outline.
+      const bool ring = !im.defined(i - 1) || !im.defined(i + 1) || !im.defined(i - 32) || !im.defined(i + 32);
+      const Vec3d p = im.positions[i];
+      if (!ring && (std::abs(p.x - u) > 1e-12 || std::abs(p.y - v) > 1e-12 || p.z != 0)) ++wrong;
+      if (ring && std::min({std::abs(p.x - coord(0)), std::abs(p.x - coord(n)), std::abs(p.y - coord(0)),
+                            std::abs(p.y - coord(n))}) > 1e-12)
+        ++wrong;
+    }
+  CHECK(missing == 0);
+  CHECK(wrong == 0);
+  CHECK(lv.stats.topology.boundary_loops == 1);
+  CHECK(lv.stats.topology.euler_characteristic == 1);
+}
