@@ -1,3 +1,9 @@
+// GCC (with -fsanitize) reports a false -Wmaybe-uninitialized inside CGAL's ray query, where a
+// boost::optional<double> is returned empty; the warning comes from inlined header code.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
 #include "mcgim/correspondence.h"
 
 #include <tbb/parallel_for.h>
