@@ -51,9 +51,11 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
   long long colored = 0, corners_with_normal = 0;
   std::vector<std::vector<int>> polygon_uvs;
   long long faces_with_uv = 0;
+  // Group ids in order of first use by a face, so that a name with no faces takes none.
   std::unordered_map<std::string, int> group_ids;
   std::vector<int> groups;
-  int current_group = -1;
+  std::string group_name;
+  int current_group = -1;  // id of group_name, -1 until a face uses it
   bool saw_group = false;
   MaxRef max_v, max_vt, max_vn;
   long long ignored_elements = 0, unknown_statements = 0, first_unknown_line = 0;
@@ -156,7 +158,7 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
       if (static_cast<long long>(raw.polygons.size()) >= options.max_faces)
         check_face_limit(path, static_cast<long long>(raw.polygons.size()) + 1, options);
       if (current_group < 0)  // faces before any g/o form the unnamed group
-        current_group = group_ids.emplace("", static_cast<int>(group_ids.size())).first->second;
+        current_group = group_ids.emplace(group_name, static_cast<int>(group_ids.size())).first->second;
       groups.push_back(current_group);
       raw.polygons.push_back(poly);
       polygon_uvs.push_back(poly_uv);
@@ -168,7 +170,8 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
       std::string name(rest.substr(i));
       while (!name.empty() && is_space(name.back())) name.pop_back();
       saw_group = true;
-      current_group = group_ids.emplace(name, static_cast<int>(group_ids.size())).first->second;
+      group_name = std::move(name);
+      current_group = -1;
     } else if (key == "l" || key == "p") {
       ++ignored_elements;
     } else if (is_ignored_statement(key)) {

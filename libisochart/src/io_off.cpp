@@ -65,13 +65,13 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
   if (nv < 0 || nf < 0 || nv > INT_MAX || nf > INT_MAX)
     fail_at_line(path, count_ln, "vertex and face counts " + std::to_string(nv) + " " + std::to_string(nf) +
                                      " are out of range");
-  check_face_limit(path, nf, options);
   // A vertex line takes at least 6 bytes ("0 0 0\n") and a face line 8 ("3 0 1 2\n"): a
   // header claiming more than the file can hold is refused before anything is allocated.
   if (nv * 6 + nf * 8 > static_cast<long long>(lines.remaining()) + 2)
     fail_at_line(path, count_ln, "header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
                                      " faces, but only " + std::to_string(lines.remaining()) +
                                      " bytes follow (truncated file or corrupt header)");
+  check_face_limit(path, nf, options);
 
   raw.positions.reserve(nv);
   if (with_normals) raw.normals.reserve(nv);
