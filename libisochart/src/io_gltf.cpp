@@ -232,6 +232,11 @@ class GltfReader {
         std::tie(base, uv_base) = found->second;
       } else {
         base = static_cast<int>(raw_.positions.size());
+        // Instancing can repeat a large vertex array; more than three vertices per allowed
+        // face cannot be a mesh within the limit.
+        if (static_cast<long long>(base) + static_cast<long long>(nv) > 3 * options_.max_faces + 3)
+          fail("has more than " + std::to_string(3 * options_.max_faces + 3) + " vertices (3 per face of the limit of " +
+               std::to_string(options_.max_faces) + " faces)");
         for (std::size_t i = 0; i < nv; ++i) {
           const double x = pos.get(i, 0), y = pos.get(i, 1), z = pos.get(i, 2);
           raw_.positions.push_back({world[0] * x + world[4] * y + world[8] * z + world[12],
@@ -285,6 +290,9 @@ class GltfReader {
         idx.resize(nv);
         for (std::size_t i = 0; i < nv; ++i) idx[i] = static_cast<std::uint32_t>(i);
       }
+      const std::size_t n = idx.size();
+      const std::size_t triangles = mode == TINYGLTF_MODE_TRIANGLES ? n / 3 : (n >= 2 ? n - 2 : 0);
+      check_face_limit(path_, static_cast<long long>(raw_.polygons.size() + triangles), options_);
       const int group = groups_++;
       auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
         if (mirror) std::swap(b, c);
@@ -295,7 +303,6 @@ class GltfReader {
         raw_.polygon_groups.push_back(group);
         with_uvs_ += uv_base < 0 ? 0 : 1;
       };
-      const std::size_t n = idx.size();
       if (mode == TINYGLTF_MODE_TRIANGLES) {
         for (std::size_t i = 0; i + 2 < n; i += 3) emit(idx[i], idx[i + 1], idx[i + 2]);
       } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
@@ -309,7 +316,6 @@ class GltfReader {
       } else {
         for (std::size_t i = 1; i + 1 < n; ++i) emit(idx[0], idx[i], idx[i + 1]);
       }
-      check_face_limit(path_, static_cast<long long>(raw_.polygons.size()), options_);
     }
   }
 
@@ -354,7 +360,10 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
 std::string first_line(const std::string& s) {
   std::string_view v = s;
   while (!v.empty() && (v.front() == '\n' || v.front() == ' ')) v.remove_prefix(1);
-  const std::string_view line = v.substr(0, v.find('\n'));
+  std::string_view line = v.substr(0, v.find('\n'));
+  // nlohmann's messages start with an internal tag such as "[json.exception.parse_error.101] ".
+  if (line.substr(0, 16) == "[json.exception." && line.find("] ") != std::string_view::npos)
+    line.remove_prefix(line.find("] ") + 2);
   return std::string(line.substr(0, 200));
 }
 

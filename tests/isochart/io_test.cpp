@@ -536,6 +536,16 @@ TEST_CASE("glTF: primitives, modes, index types and transforms", "[io]") {
   }
   CHECK(a.positions == b.positions);
   CHECK(a.polygons == b.polygons);
+
+  // The same with the buffer in a file beside the .gltf.
+  nlohmann::json doc = s.doc;
+  doc["buffers"] = {{{"byteLength", s.bin.size()}, {"uri", "s.bin"}}};
+  d.write("s.bin", s.bin);
+  const RawMesh c = read_raw_mesh(d.write("external.gltf", doc.dump()));
+  CHECK(c.positions == a.positions);
+  CHECK(c.polygons == a.polygons);
+  fs::remove(d.file("s.bin"));
+  CHECK_THAT(load_error(d.file("external.gltf")), Catch::StartsWith("invalid glTF"));
 }
 
 TEST_CASE("glTF: malformed files are clear errors", "[io]") {
@@ -559,6 +569,9 @@ TEST_CASE("glTF: malformed files are clear errors", "[io]") {
   s.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
   s.doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
   CHECK_THAT(load_error(d.write("draco.glb", glb_of(s))), Catch::Contains("unsupported extension"));
+  LoadOptions o;
+  o.max_faces = 3;  // the fan would be faces 3 and 4
+  CHECK_THAT(load_error(d.write("limit.glb", glb_of(gltf_sample())), o), Catch::Contains("has 4 faces, more than the limit of 3"));
 }
 
 // ---- Writers -------------------------------------------------------------------------------
