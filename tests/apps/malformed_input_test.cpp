@@ -13,41 +13,17 @@
 #include <fstream>
 #include <sstream>
 
-#include "isochart/io.h"
+#include "isochart/io_test_util.h"
 
-namespace fs = std::filesystem;
+using namespace io_test;
 
 namespace {
-
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& tag) {
-    path = fs::temp_directory_path() / ("isocharts_" + tag + "_" + std::to_string(::getpid()));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-};
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-void write_bytes(const fs::path& p, const std::string& data) { std::ofstream(p, std::ios::binary) << data; }
 
 // Runs the CLI with stdout discarded and stderr saved; returns the exit code.
 int run_cli(const std::string& args, const fs::path& err) {
   const std::string cmd = std::string("'") + ISOCHARTS_CLI + "' " + args + " > /dev/null 2> '" + err.string() + "'";
   const int status = std::system(cmd.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::vector<std::string> entries(const fs::path& dir) {
-  std::vector<std::string> e;
-  for (const auto& d : fs::directory_iterator(dir)) e.push_back(d.path().filename().string());
-  std::sort(e.begin(), e.end());
-  return e;
 }
 
 // Deterministic pseudo-random bytes (no global rand()).
@@ -62,9 +38,7 @@ std::string noise(std::size_t n, std::uint32_t seed) {
 
 template <typename T>
 std::string le(T v) {
-  std::string s(sizeof(T), '\0');
-  std::memcpy(s.data(), &v, sizeof(T));
-  return s;
+  return Bytes().put(v).data;
 }
 
 const std::string kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
@@ -86,18 +60,12 @@ std::string binary_ply_triangle(float bad) {
 std::string gltf_with_count(int count) {
   std::string bin;
   for (float x : {0.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}) bin += le(x);
-  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string b64;
-  for (std::size_t i = 0; i < bin.size(); i += 3) {  // 36 bytes: no padding needed
-    const unsigned n = (unsigned char)bin[i] << 16 | (unsigned char)bin[i + 1] << 8 | (unsigned char)bin[i + 2];
-    b64 += {t[n >> 18], t[(n >> 12) & 63], t[(n >> 6) & 63], t[n & 63]};
-  }
   const nlohmann::json doc = {
       {"asset", {{"version", "2.0"}}},
       {"scenes", {{{"nodes", {0}}}}},
       {"nodes", {{{"mesh", 0}}}},
       {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}}}}}}},
-      {"buffers", {{{"byteLength", 36}, {"uri", "data:application/octet-stream;base64," + b64}}}},
+      {"buffers", {{{"byteLength", 36}, {"uri", "data:application/octet-stream;base64," + base64(bin)}}}},
       {"bufferViews", {{{"buffer", 0}, {"byteLength", 36}}}},
       {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", count}, {"type", "VEC3"}}}}};
   return doc.dump();
@@ -183,7 +151,7 @@ TEST_CASE("malformed inputs: exit 2, one clear line, nothing left behind", "[cli
     const std::vector<std::string> before = entries(dir);
     const fs::path err = tmp.path / ("stderr" + std::to_string(index) + ".txt");
     const int code = run_cli("info '" + input.string() + "' --report '" + (dir / "OUT.json").string() + "'", err);
-    const std::string text = read_text(err);
+    const std::string text = read_bytes(err);
     CHECK(code == 2);
     CHECK(std::count(text.begin(), text.end(), '\n') == 1);
     CHECK(text.back() == '\n');
@@ -224,7 +192,7 @@ TEST_CASE("repairable inputs: warnings and exit 0, or exit 2 with --no-repair", 
     write_bytes(input, c.content);
 
     CHECK(run_cli("info '" + input.string() + "' --report '" + out.string() + "'", err) == 0);
-    std::istringstream lines(read_text(err));
+    std::istringstream lines(read_bytes(err));
     std::vector<std::string> got;
     for (std::string line; std::getline(lines, line);) got.push_back(line);
     REQUIRE(got.size() == c.warnings.size());
@@ -233,12 +201,12 @@ TEST_CASE("repairable inputs: warnings and exit 0, or exit 2 with --no-repair", 
       CHECK_THAT(got[i], Catch::Contains(c.warnings[i]));
     }
     REQUIRE(fs::exists(out));
-    const nlohmann::json report = nlohmann::json::parse(read_text(out));
+    const nlohmann::json report = nlohmann::json::parse(read_bytes(out));
     CHECK(report["warnings"].size() == c.warnings.size());
     fs::remove(out);
 
     CHECK(run_cli("info --no-repair '" + input.string() + "' --report '" + out.string() + "'", err) == 2);
-    const std::string text = read_text(err);
+    const std::string text = read_bytes(err);
     CHECK(std::count(text.begin(), text.end(), '\n') == 1);
     CHECK_THAT(text, Catch::StartsWith("isocharts: error: " + input.string() + ": "));
     CHECK_THAT(text, Catch::Contains("use repair"));
@@ -251,12 +219,12 @@ TEST_CASE("the report is written atomically next to a good input", "[cli]") {
   const fs::path input = tmp.path / "tetra.obj", out = tmp.path / "report.json", err = tmp.path / "err.txt";
   write_bytes(input, kTetraObj);
   REQUIRE(run_cli("info '" + input.string() + "' --json --report '" + out.string() + "'", err) == 0);
-  CHECK(read_text(err).empty());
-  const nlohmann::json j = nlohmann::json::parse(read_text(out));
+  CHECK(read_bytes(err).empty());
+  const nlohmann::json j = nlohmann::json::parse(read_bytes(out));
   CHECK(j["faces"] == 4);
   CHECK(j["closed"] == true);
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt", "report.json", "tetra.obj"});
   // An unwritable report path is a clear error too.
   CHECK(run_cli("info '" + input.string() + "' --report '" + (tmp.path / "no/dir/r.json").string() + "'", err) == 2);
-  CHECK_THAT(read_text(err), Catch::StartsWith("isocharts: error: ") && Catch::Contains("cannot write"));
+  CHECK_THAT(read_bytes(err), Catch::StartsWith("isocharts: error: ") && Catch::Contains("cannot write"));
 }

@@ -1,7 +1,5 @@
 #include "isochart/io.h"
 
-#include <unistd.h>
-
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
@@ -13,40 +11,12 @@
 #include <sstream>
 
 #include "isochart/error.h"
+#include "isochart/io_test_util.h"
 
 using namespace isochart;
-namespace fs = std::filesystem;
+using namespace io_test;
 
 namespace {
-
-// A fresh directory per test case, removed afterwards.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    static int counter = 0;
-    path = fs::temp_directory_path() /
-           ("isocharts_io_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  std::string file(const std::string& name) const { return (path / name).string(); }
-  std::string write(const std::string& name, const std::string& content) const {
-    std::ofstream(file(name), std::ios::binary) << content;
-    return file(name);
-  }
-  std::vector<std::string> entries() const {
-    std::vector<std::string> e;
-    for (const auto& d : fs::directory_iterator(path)) e.push_back(d.path().filename().string());
-    std::sort(e.begin(), e.end());
-    return e;
-  }
-};
-
-std::string read_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 std::string load_error(const std::string& path, const LoadOptions& o = {}) {
   try {
@@ -56,38 +26,6 @@ std::string load_error(const std::string& path, const LoadOptions& o = {}) {
     return e.what();
   }
   return "";
-}
-
-// Binary record builder with a chosen byte order.
-struct Bytes {
-  std::string data;
-  bool big_endian = false;
-  template <typename T>
-  Bytes& put(T v) {
-    char b[sizeof(T)];
-    std::memcpy(b, &v, sizeof(T));
-    if (big_endian) std::reverse(b, b + sizeof(T));
-    data.append(b, sizeof(T));
-    return *this;
-  }
-};
-
-std::string base64(const std::string& in) {
-  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  std::size_t i = 0;
-  for (; i + 2 < in.size(); i += 3) {
-    const unsigned n = (unsigned char)in[i] << 16 | (unsigned char)in[i + 1] << 8 | (unsigned char)in[i + 2];
-    out += {t[n >> 18], t[(n >> 12) & 63], t[(n >> 6) & 63], t[n & 63]};
-  }
-  if (i + 1 == in.size()) {
-    const unsigned n = (unsigned char)in[i] << 16;
-    out += {t[n >> 18], t[(n >> 12) & 63], '=', '='};
-  } else if (i + 2 == in.size()) {
-    const unsigned n = (unsigned char)in[i] << 16 | (unsigned char)in[i + 1] << 8;
-    out += {t[n >> 18], t[(n >> 12) & 63], t[(n >> 6) & 63], '='};
-  }
-  return out;
 }
 
 // A GLB container around a JSON document and a binary chunk.

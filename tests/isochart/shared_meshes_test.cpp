@@ -6,8 +6,11 @@
 
 #include "isochart/error.h"
 #include "isochart/io.h"
+#include "isochart/io_test_util.h"
 
 using namespace isochart;
+using io_test::consistently_oriented;
+using io_test::signed_volume;
 
 namespace {
 
@@ -28,27 +31,6 @@ const Expected kMeshes[] = {
 };
 
 std::string mesh_path(const std::string& name) { return std::string(ISOCHARTS_SHARED_DATA) + "/meshes/" + name; }
-
-double signed_volume(const Mesh& m) {
-  double v = 0;
-  const Vec3d o = m.positions[0];
-  for (const auto& f : m.faces)
-    v += dot(m.positions[f[0]] - o, cross(m.positions[f[1]] - o, m.positions[f[2]] - o)) / 6;
-  return v;
-}
-
-bool consistently_oriented(const Mesh& m, const Topology& t) {
-  for (int e = 0; e < t.num_edges(); ++e) {
-    const IndexRange ef = t.edge_faces(e);
-    if (ef.size() != 2) continue;
-    int dir[2] = {0, 0};
-    for (int i = 0; i < 2; ++i)
-      for (int k = 0; k < 3; ++k)
-        if (t.face_edge(ef[i], k) == e) dir[i] = m.faces[ef[i]][k] == t.edge(e).v0 ? 1 : -1;
-    if (dir[0] == dir[1]) return false;
-  }
-  return true;
-}
 
 }  // namespace
 

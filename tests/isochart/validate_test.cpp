@@ -8,8 +8,10 @@
 #include <set>
 
 #include "isochart/error.h"
+#include "isochart/io_test_util.h"
 
 using namespace isochart;
+using io_test::signed_volume;
 
 namespace {
 
@@ -44,27 +46,6 @@ RawMesh cube_triangles() {
   return r;
 }
 
-double signed_volume(const Mesh& m) {
-  double v = 0;
-  for (const auto& f : m.faces) v += dot(m.positions[f[0]], cross(m.positions[f[1]], m.positions[f[2]])) / 6;
-  return v;
-}
-
-// Every edge with two faces is run in opposite directions by them.
-bool consistently_oriented(const Mesh& m) {
-  const Topology t(m);
-  for (int e = 0; e < t.num_edges(); ++e) {
-    const IndexRange ef = t.edge_faces(e);
-    if (ef.size() != 2) continue;
-    int dir[2] = {0, 0};
-    for (int i = 0; i < 2; ++i)
-      for (int k = 0; k < 3; ++k)
-        if (t.face_edge(ef[i], k) == e) dir[i] = m.faces[ef[i]][k] == t.edge(e).v0 ? 1 : -1;
-    if (dir[0] == dir[1]) return false;
-  }
-  return true;
-}
-
 bool has_degenerate_or_duplicate(const Mesh& m) {
   std::set<std::array<int, 3>> seen;
   for (const auto& f : m.faces) {
@@ -82,7 +63,7 @@ void check_clean(const Mesh& m) {
   const Topology t(m);
   CHECK(t.nonmanifold_edges().empty());
   CHECK(t.nonmanifold_vertices().empty());
-  CHECK(consistently_oriented(m));
+  CHECK(io_test::consistently_oriented(m, t));
   CHECK_FALSE(has_degenerate_or_duplicate(m));
   CHECK(t.num_referenced_vertices() == m.num_vertices());
 }
