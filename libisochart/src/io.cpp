@@ -79,8 +79,7 @@ bool parse_int(std::string_view token, long long& value) {
   return r.ec == std::errc() && r.ptr == end;
 }
 
-double expect_number(std::string_view& rest, const std::string& path, long long line,
-                     const char* what) {
+double expect_number(std::string_view& rest, const std::string& path, long long line, const char* what) {
   std::string_view tok;
   if (!next_token(rest, tok)) fail_at_line(path, line, std::string("expected ") + what);
   double v = 0;
@@ -156,8 +155,8 @@ MeshFormat format_from_path(const std::string& path) {
   if (ext == "ply") return MeshFormat::Ply;
   if (ext == "gltf") return MeshFormat::Gltf;
   if (ext == "glb") return MeshFormat::Glb;
-  throw InputError(path, "unknown mesh format " + quoted("." + ext) +
-                             " (expected .obj, .off, .ply, .gltf or .glb)");
+  throw InputError(
+      path, "unknown mesh format " + quoted("." + ext) + " (expected .obj, .off, .ply, .gltf or .glb)");
 }
 
 RawMesh read_raw_mesh(const std::string& path, const LoadOptions& options) {
@@ -166,12 +165,18 @@ RawMesh read_raw_mesh(const std::string& path, const LoadOptions& options) {
   const std::string data = read_file(path);
   if (data.empty()) throw InputError(path, "file is empty");
   switch (fmt) {
-    case MeshFormat::Obj: return read_obj(path, data, options);
-    case MeshFormat::Off: return read_off(path, data, options);
-    case MeshFormat::Ply: return read_ply(path, data, options);
-    case MeshFormat::Gltf: return read_gltf(path, data, false, options);
-    case MeshFormat::Glb: return read_gltf(path, data, true, options);
-    case MeshFormat::Builtin: break;
+    case MeshFormat::Obj:
+      return read_obj(path, data, options);
+    case MeshFormat::Off:
+      return read_off(path, data, options);
+    case MeshFormat::Ply:
+      return read_ply(path, data, options);
+    case MeshFormat::Gltf:
+      return read_gltf(path, data, false, options);
+    case MeshFormat::Glb:
+      return read_gltf(path, data, true, options);
+    case MeshFormat::Builtin:
+      break;
   }
   throw Error("unhandled mesh format");
 }
@@ -180,7 +185,8 @@ LoadResult load_mesh(const std::string& path, const LoadOptions& options) {
   const RawMesh raw = read_raw_mesh(path, options);
   // The limit is on triangles, so polygons count with their triangulation.
   long long triangles = 0;
-  for (const auto& poly : raw.polygons) triangles += std::max<long long>(1, static_cast<long long>(poly.size()) - 2);
+  for (const auto& poly : raw.polygons)
+    triangles += std::max<long long>(1, static_cast<long long>(poly.size()) - 2);
   check_face_limit(path, triangles, options);
   LoadResult r;
   r.mesh = validate_mesh(raw, options.repair, r.report);
@@ -211,11 +217,16 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
       }
       return;
     }
-    case MeshFormat::Ply: write_file_atomic(path, ply_bytes(mesh, options.binary_ply)); return;
-    case MeshFormat::Glb: write_file_atomic(path, glb_bytes(mesh, options.texture)); return;
+    case MeshFormat::Ply:
+      write_file_atomic(path, ply_bytes(mesh, options.binary_ply));
+      return;
+    case MeshFormat::Glb:
+      write_file_atomic(path, glb_bytes(mesh, options.texture));
+      return;
     case MeshFormat::Off:
     case MeshFormat::Gltf:
-    case MeshFormat::Builtin: break;
+    case MeshFormat::Builtin:
+      break;
   }
   throw InputError(path, "cannot write this format (expected .obj, .ply or .glb)");
 }

@@ -52,9 +52,12 @@ Mat4 local_transform(const tinygltf::Node& n) {
   const double sy = n.scale.size() == 3 ? n.scale[1] : 1;
   const double sz = n.scale.size() == 3 ? n.scale[2] : 1;
   // T * R * S, column-major.
-  const double r00 = 1 - 2 * (qy * qy + qz * qz), r01 = 2 * (qx * qy - qz * qw), r02 = 2 * (qx * qz + qy * qw);
-  const double r10 = 2 * (qx * qy + qz * qw), r11 = 1 - 2 * (qx * qx + qz * qz), r12 = 2 * (qy * qz - qx * qw);
-  const double r20 = 2 * (qx * qz - qy * qw), r21 = 2 * (qy * qz + qx * qw), r22 = 1 - 2 * (qx * qx + qy * qy);
+  const double r00 = 1 - 2 * (qy * qy + qz * qz), r01 = 2 * (qx * qy - qz * qw),
+               r02 = 2 * (qx * qz + qy * qw);
+  const double r10 = 2 * (qx * qy + qz * qw), r11 = 1 - 2 * (qx * qx + qz * qz),
+               r12 = 2 * (qy * qz - qx * qw);
+  const double r20 = 2 * (qx * qz - qy * qw), r21 = 2 * (qy * qz + qx * qw),
+               r22 = 1 - 2 * (qx * qx + qy * qy);
   return {r00 * sx, r10 * sx, r20 * sx, 0, r01 * sy, r11 * sy, r21 * sy, 0,
           r02 * sz, r12 * sz, r22 * sz, 0, tx,       ty,       tz,       1};
 }
@@ -70,8 +73,9 @@ std::array<double, 9> normal_matrix(const Mat4& m) {
   const double a = m[0], b = m[4], c = m[8], d = m[1], e = m[5], f = m[9], g = m[2], h = m[6], i = m[10];
   const double s = det3(m) < 0 ? -1 : 1;
   // Rows of the cofactor matrix.
-  return {s * (e * i - f * h), s * (f * g - d * i), s * (d * h - e * g), s * (c * h - b * i), s * (a * i - c * g),
-          s * (b * g - a * h), s * (b * f - c * e), s * (c * d - a * f), s * (a * e - b * d)};
+  return {s * (e * i - f * h), s * (f * g - d * i), s * (d * h - e * g),
+          s * (c * h - b * i), s * (a * i - c * g), s * (b * g - a * h),
+          s * (b * f - c * e), s * (c * d - a * f), s * (a * e - b * d)};
 }
 
 // A bounds-checked view of an accessor's elements.
@@ -92,7 +96,8 @@ struct AccessorView {
         std::memcpy(&x, p + c, 1);
         return normalized ? std::max(x / 127.0, -1.0) : x;
       }
-      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[c] / 255.0 : p[c];
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return normalized ? p[c] / 255.0 : p[c];
       case TINYGLTF_COMPONENT_TYPE_SHORT: {
         std::int16_t x;
         std::memcpy(&x, p + 2 * c, 2);
@@ -139,7 +144,8 @@ class GltfReader {
       for (std::size_t m = 0; m < model_.meshes.size(); ++m) add_mesh(static_cast<int>(m), kIdentity);
     } else {
       const int scene = model_.defaultScene >= 0 ? model_.defaultScene : 0;
-      if (scene >= static_cast<int>(model_.scenes.size())) fail("default scene " + std::to_string(scene) + " does not exist");
+      if (scene >= static_cast<int>(model_.scenes.size()))
+        fail("default scene " + std::to_string(scene) + " does not exist");
       for (int n : model_.scenes[scene].nodes) visit(n, kIdentity);
     }
     finish();
@@ -150,10 +156,12 @@ class GltfReader {
   [[noreturn]] void fail(const std::string& message) const { throw InputError(path_, message); }
 
   void visit(int node, const Mat4& parent) {
-    if (node < 0 || node >= static_cast<int>(model_.nodes.size())) fail("node " + std::to_string(node) + " does not exist");
+    if (node < 0 || node >= static_cast<int>(model_.nodes.size()))
+      fail("node " + std::to_string(node) + " does not exist");
     // glTF nodes form a forest; a second visit means a cycle or a shared child, either of
     // which could make the traversal endless or exponential.
-    if (visited_[node]) fail("node " + std::to_string(node) + " is reached twice (a cycle or a node with two parents)");
+    if (visited_[node])
+      fail("node " + std::to_string(node) + " is reached twice (a cycle or a node with two parents)");
     visited_[node] = 1;
     const tinygltf::Node& n = model_.nodes[node];
     const Mat4 world = multiply(parent, local_transform(n));
@@ -161,7 +169,8 @@ class GltfReader {
     for (int c : n.children) visit(c, world);
   }
 
-  AccessorView view(int index, const std::string& what, std::initializer_list<int> types, bool need_data) const {
+  AccessorView view(int index, const std::string& what, std::initializer_list<int> types,
+                    bool need_data) const {
     if (index < 0 || index >= static_cast<int>(model_.accessors.size()))
       fail(what + ": accessor " + std::to_string(index) + " does not exist");
     const tinygltf::Accessor& a = model_.accessors[index];
@@ -174,7 +183,8 @@ class GltfReader {
     v.components = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type));
     v.normalized = a.normalized;
     const int csize = tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(a.componentType));
-    if (csize <= 0 || csize == 8) fail(name + " has an unsupported component type " + std::to_string(a.componentType));
+    if (csize <= 0 || csize == 8)
+      fail(name + " has an unsupported component type " + std::to_string(a.componentType));
     const std::size_t elem = static_cast<std::size_t>(csize) * v.components;
     if (a.bufferView < 0) {
       // All zeros by the spec; allowed only where the count is bounded by real data.
@@ -191,15 +201,17 @@ class GltfReader {
       fail(name + ": bufferView " + std::to_string(a.bufferView) + " runs past the end of its buffer");
     v.stride = bv.byteStride ? bv.byteStride : elem;
     if (v.stride < elem) fail(name + ": byteStride is smaller than an element");
-    if (a.count > 0 && (a.byteOffset > bv.byteLength || a.count - 1 > (bv.byteLength - a.byteOffset) / v.stride ||
-                        (a.count - 1) * v.stride + elem > bv.byteLength - a.byteOffset))
+    if (a.count > 0 &&
+        (a.byteOffset > bv.byteLength || a.count - 1 > (bv.byteLength - a.byteOffset) / v.stride ||
+         (a.count - 1) * v.stride + elem > bv.byteLength - a.byteOffset))
       fail(name + " runs past the end of its bufferView (truncated or corrupt file)");
     v.data = buf.data() + bv.byteOffset + a.byteOffset;
     return v;
   }
 
   void add_mesh(int mesh, const Mat4& world) {
-    if (mesh < 0 || mesh >= static_cast<int>(model_.meshes.size())) fail("mesh " + std::to_string(mesh) + " does not exist");
+    if (mesh < 0 || mesh >= static_cast<int>(model_.meshes.size()))
+      fail("mesh " + std::to_string(mesh) + " does not exist");
     const bool mirror = det3(world) < 0;
     const auto nm = normal_matrix(world);
     // Primitives of one node that name the same attribute accessors share their vertices.
@@ -209,7 +221,8 @@ class GltfReader {
       const tinygltf::Primitive& p = prims[pi];
       const std::string what = "mesh " + std::to_string(mesh) + " primitive " + std::to_string(pi);
       const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
-      if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+      if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+          mode != TINYGLTF_MODE_TRIANGLE_FAN) {
         ++skipped_primitives_;
         continue;
       }
@@ -223,7 +236,8 @@ class GltfReader {
       const std::size_t nv = pos.count;
       auto check_count = [&](const AccessorView& v, const char* name) {
         if (v.count != nv)
-          fail(what + " " + name + " has " + std::to_string(v.count) + " values for " + std::to_string(nv) + " vertices");
+          fail(what + " " + name + " has " + std::to_string(v.count) + " values for " + std::to_string(nv) +
+               " vertices");
         return v;
       };
       int base = 0, uv_base = -1;
@@ -235,8 +249,8 @@ class GltfReader {
         // Instancing can repeat a large vertex array; more than three vertices per allowed
         // face cannot be a mesh within the limit.
         if (static_cast<long long>(base) + static_cast<long long>(nv) > 3 * options_.max_faces + 3)
-          fail("has more than " + std::to_string(3 * options_.max_faces + 3) + " vertices (3 per face of the limit of " +
-               std::to_string(options_.max_faces) + " faces)");
+          fail("has more than " + std::to_string(3 * options_.max_faces + 3) +
+               " vertices (3 per face of the limit of " + std::to_string(options_.max_faces) + " faces)");
         for (std::size_t i = 0; i < nv; ++i) {
           const double x = pos.get(i, 0), y = pos.get(i, 1), z = pos.get(i, 2);
           raw_.positions.push_back({world[0] * x + world[4] * y + world[8] * z + world[12],
@@ -246,17 +260,19 @@ class GltfReader {
         normals_.resize(raw_.positions.size());
         colors_.resize(raw_.positions.size());
         if (ids[1] >= 0) {
-          const AccessorView n = check_count(view(ids[1], what + " NORMAL", {TINYGLTF_TYPE_VEC3}, false), "NORMAL");
+          const AccessorView n =
+              check_count(view(ids[1], what + " NORMAL", {TINYGLTF_TYPE_VEC3}, false), "NORMAL");
           for (std::size_t i = 0; i < nv; ++i) {
             const double x = n.get(i, 0), y = n.get(i, 1), z = n.get(i, 2);
-            normals_[base + i] = normalized(Vec3d{nm[0] * x + nm[1] * y + nm[2] * z, nm[3] * x + nm[4] * y + nm[5] * z,
-                                                  nm[6] * x + nm[7] * y + nm[8] * z});
+            normals_[base + i] =
+                normalized(Vec3d{nm[0] * x + nm[1] * y + nm[2] * z, nm[3] * x + nm[4] * y + nm[5] * z,
+                                 nm[6] * x + nm[7] * y + nm[8] * z});
           }
           with_normals_ += static_cast<long long>(nv);
         }
         if (ids[3] >= 0) {
-          const AccessorView c =
-              check_count(view(ids[3], what + " COLOR_0", {TINYGLTF_TYPE_VEC3, TINYGLTF_TYPE_VEC4}, false), "COLOR_0");
+          const AccessorView c = check_count(
+              view(ids[3], what + " COLOR_0", {TINYGLTF_TYPE_VEC3, TINYGLTF_TYPE_VEC4}, false), "COLOR_0");
           for (std::size_t i = 0; i < nv; ++i) colors_[base + i] = {c.get(i, 0), c.get(i, 1), c.get(i, 2)};
           with_colors_ += static_cast<long long>(nv);
         }
@@ -296,9 +312,11 @@ class GltfReader {
       const int group = groups_++;
       auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
         if (mirror) std::swap(b, c);
-        raw_.polygons.push_back({base + static_cast<int>(a), base + static_cast<int>(b), base + static_cast<int>(c)});
+        raw_.polygons.push_back(
+            {base + static_cast<int>(a), base + static_cast<int>(b), base + static_cast<int>(c)});
         raw_.polygon_uvs.push_back(uv_base < 0 ? std::vector<int>{}
-                                               : std::vector<int>{uv_base + static_cast<int>(a), uv_base + static_cast<int>(b),
+                                               : std::vector<int>{uv_base + static_cast<int>(a),
+                                                                  uv_base + static_cast<int>(b),
                                                                   uv_base + static_cast<int>(c)});
         raw_.polygon_groups.push_back(group);
         with_uvs_ += uv_base < 0 ? 0 : 1;
@@ -310,8 +328,10 @@ class GltfReader {
         for (std::size_t i = 0; i + 2 < n; ++i) {
           const std::uint32_t a = idx[i], b = idx[i + 1], c = idx[i + 2];
           if (a == b || b == c || a == c) continue;
-          if (i % 2 == 0) emit(a, b, c);
-          else emit(b, a, c);
+          if (i % 2 == 0)
+            emit(a, b, c);
+          else
+            emit(b, a, c);
         }
       } else {
         for (std::size_t i = 1; i + 1 < n; ++i) emit(idx[0], idx[i], idx[i + 1]);
@@ -334,12 +354,17 @@ class GltfReader {
         if (puv.empty()) puv.assign(3, zero);
       raw_.warnings.push_back(std::to_string(nf - with_uvs_) + " faces have no TEXCOORD_0; they get (0, 0)");
     }
-    if (with_normals_ == nv && nv > 0) raw_.normals = std::move(normals_);
-    else if (with_normals_ > 0) raw_.warnings.push_back("only some primitives have normals; normals ignored");
-    if (with_colors_ == nv && nv > 0) raw_.colors = std::move(colors_);
-    else if (with_colors_ > 0) raw_.warnings.push_back("only some primitives have colours; colours ignored");
+    if (with_normals_ == nv && nv > 0)
+      raw_.normals = std::move(normals_);
+    else if (with_normals_ > 0)
+      raw_.warnings.push_back("only some primitives have normals; normals ignored");
+    if (with_colors_ == nv && nv > 0)
+      raw_.colors = std::move(colors_);
+    else if (with_colors_ > 0)
+      raw_.warnings.push_back("only some primitives have colours; colours ignored");
     if (skipped_primitives_ > 0)
-      raw_.warnings.push_back("ignored " + std::to_string(skipped_primitives_) + " point and line primitives");
+      raw_.warnings.push_back("ignored " + std::to_string(skipped_primitives_) +
+                              " point and line primitives");
   }
 
   const std::string& path_;
@@ -353,7 +378,8 @@ class GltfReader {
 };
 
 // Images are not needed to read a mesh, so they are not decoded.
-bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                void*) {
   return true;
 }
 
@@ -389,14 +415,16 @@ RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, c
   const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
   bool ok = false;
   try {
-    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, reinterpret_cast<const unsigned char*>(data.data()),
+    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn,
+                                              reinterpret_cast<const unsigned char*>(data.data()),
                                               static_cast<unsigned int>(data.size()), base_dir)
-                : loader.LoadASCIIFromString(&model, &err, &warn, data.data(), static_cast<unsigned int>(data.size()),
-                                             base_dir);
+                : loader.LoadASCIIFromString(&model, &err, &warn, data.data(),
+                                             static_cast<unsigned int>(data.size()), base_dir);
   } catch (const std::exception& e) {
     throw InputError(path, std::string("invalid glTF: ") + first_line(e.what()));
   }
-  if (!ok) throw InputError(path, "invalid glTF: " + (err.empty() ? std::string("cannot parse") : first_line(err)));
+  if (!ok)
+    throw InputError(path, "invalid glTF: " + (err.empty() ? std::string("cannot parse") : first_line(err)));
   return GltfReader(path, model, options).read();
 }
 
@@ -483,9 +511,12 @@ std::string glb_bytes(const Mesh& m, const std::string& texture) {
       throw InputError(texture, std::string("texture ") + e.what());
     }
     std::string mime;
-    if (bytes.size() >= 8 && std::memcmp(bytes.data(), "\x89PNG\r\n\x1a\n", 8) == 0) mime = "image/png";
-    else if (bytes.size() >= 3 && std::memcmp(bytes.data(), "\xff\xd8\xff", 3) == 0) mime = "image/jpeg";
-    else throw InputError(texture, "texture is not a PNG or JPEG image");
+    if (bytes.size() >= 8 && std::memcmp(bytes.data(), "\x89PNG\r\n\x1a\n", 8) == 0)
+      mime = "image/png";
+    else if (bytes.size() >= 3 && std::memcmp(bytes.data(), "\xff\xd8\xff", 3) == 0)
+      mime = "image/jpeg";
+    else
+      throw InputError(texture, "texture is not a PNG or JPEG image");
     const std::size_t off = buf.size();
     buf.insert(buf.end(), bytes.begin(), bytes.end());
     tinygltf::Image image;

@@ -14,8 +14,7 @@ namespace isochart::io_detail {
 RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptions& options);
 RawMesh read_off(const std::string& path, std::string_view data, const LoadOptions& options);
 RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptions& options);
-RawMesh read_gltf(const std::string& path, std::string_view data, bool binary,
-                  const LoadOptions& options);
+RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, const LoadOptions& options);
 
 // ---- Writers: return the file contents; save_mesh writes them atomically ----
 std::string obj_text(const Mesh& mesh, const std::string& mtl_file, bool write_groups);
@@ -57,7 +56,9 @@ class LineScanner {
   long long line_ = 0;
 };
 
-inline bool is_space(char c) { return c == ' ' || c == '\t' || c == '\v' || c == '\f' || c == '\r'; }
+inline bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\v' || c == '\f' || c == '\r';
+}
 
 /// Splits off the next whitespace-separated token; false when none is left.
 inline bool next_token(std::string_view& s, std::string_view& token) {
@@ -80,8 +81,7 @@ bool parse_double(std::string_view token, double& value);
 bool parse_int(std::string_view token, long long& value);
 
 /// Parses the next token on a line as a finite number, or throws naming the line and `what`.
-double expect_number(std::string_view& rest, const std::string& path, long long line,
-                     const char* what);
+double expect_number(std::string_view& rest, const std::string& path, long long line, const char* what);
 
 /// Appends the shortest text that reads back as exactly `v` (std::to_chars).
 void append_number(std::string& out, double v);

@@ -24,10 +24,10 @@ bool is_identifier(std::string_view s) {
 // free-form geometry, display attributes).
 bool is_ignored_statement(std::string_view key) {
   static const char* const names[] = {
-      "s",     "mtllib", "usemtl", "usemap",   "maplib",   "vp",         "cstype",    "deg",
-      "bmat",  "step",   "curv",   "curv2",    "surf",     "parm",       "trim",      "hole",
-      "scrv",  "sp",     "end",    "con",      "mg",       "lod",        "bevel",     "c_interp",
-      "d_interp", "shadow_obj", "trace_obj", "ctech", "stech", "call", "csh"};
+      "s",        "mtllib",     "usemtl",    "usemap", "maplib", "vp",   "cstype", "deg",
+      "bmat",     "step",       "curv",      "curv2",  "surf",   "parm", "trim",   "hole",
+      "scrv",     "sp",         "end",       "con",    "mg",     "lod",  "bevel",  "c_interp",
+      "d_interp", "shadow_obj", "trace_obj", "ctech",  "stech",  "call", "csh"};
   for (const char* n : names)
     if (key == n) return true;
   return false;
@@ -45,8 +45,8 @@ struct MaxRef {
 RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptions& options) {
   RawMesh raw;
   raw.source = path;
-  std::vector<Vec3d> normals_in;  // the vn list
-  std::vector<int> corner_normal; // per corner of raw.polygons in order, -1 when none
+  std::vector<Vec3d> normals_in;   // the vn list
+  std::vector<int> corner_normal;  // per corner of raw.polygons in order, -1 when none
   std::vector<Vec3d> colors;
   long long colored = 0, corners_with_normal = 0;
   std::vector<std::vector<int>> polygon_uvs;
@@ -83,8 +83,9 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
       }
       if (n < 3) fail_at_line(path, ln, "expected 3 coordinates after 'v'");
       if (n != 3 && n != 4 && n != 6)
-        fail_at_line(path, ln, "expected x y z, x y z w or x y z r g b after 'v', found " +
-                                   std::to_string(n) + " numbers");
+        fail_at_line(
+            path, ln,
+            "expected x y z, x y z w or x y z r g b after 'v', found " + std::to_string(n) + " numbers");
       raw.positions.push_back({c[0], c[1], c[2]});
       if (n == 6) {
         colors.resize(raw.positions.size());
@@ -97,7 +98,8 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
       std::string_view tok;
       if (next_token(rest, tok) && tok[0] != '#') {
         if (!parse_double(tok, uv.y)) fail_at_line(path, ln, quoted(tok) + " is not a number");
-        if (!std::isfinite(uv.y)) fail_at_line(path, ln, "texture coordinate " + quoted(tok) + " is not finite");
+        if (!std::isfinite(uv.y))
+          fail_at_line(path, ln, "texture coordinate " + quoted(tok) + " is not finite");
       }
       raw.uvs.push_back(uv);
     } else if (key == "vn") {
@@ -126,13 +128,16 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
         auto resolve = [&](std::string_view s, std::size_t count, const char* what, MaxRef& max) {
           long long i = 0;
           if (!parse_int(s, i))
-            fail_at_line(path, ln, quoted(tok) + " is not a face corner (expected v, v/vt, v//vn or v/vt/vn)");
-          if (i == 0) fail_at_line(path, ln, std::string(what) + " index 0 is invalid (OBJ indices start at 1)");
+            fail_at_line(path, ln,
+                         quoted(tok) + " is not a face corner (expected v, v/vt, v//vn or v/vt/vn)");
+          if (i == 0)
+            fail_at_line(path, ln, std::string(what) + " index 0 is invalid (OBJ indices start at 1)");
           if (i < 0) {
             if (-i > static_cast<long long>(count))
-              fail_at_line(path, ln, "relative " + std::string(what) + " index " + std::to_string(i) +
-                                         " reaches before the first " + what + " (only " +
-                                         std::to_string(count) + " so far)");
+              fail_at_line(path, ln,
+                           "relative " + std::string(what) + " index " + std::to_string(i) +
+                               " reaches before the first " + what + " (only " + std::to_string(count) +
+                               " so far)");
             return static_cast<int>(static_cast<long long>(count) + i);
           }
           if (i > INT_MAX)
@@ -152,7 +157,8 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
         corners_with_normal += has_n ? 1 : 0;
       }
       if (poly.size() < 3)
-        fail_at_line(path, ln, "face has " + std::to_string(poly.size()) + " corners; a face needs at least 3");
+        fail_at_line(path, ln,
+                     "face has " + std::to_string(poly.size()) + " corners; a face needs at least 3");
       if (with_uv != 0 && with_uv != static_cast<int>(poly.size()))
         fail_at_line(path, ln, "face mixes corners with and without texture coordinates");
       if (static_cast<long long>(raw.polygons.size()) >= options.max_faces)
@@ -188,9 +194,9 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
 
   auto check_max = [&](const MaxRef& max, std::size_t count, const char* what, const char* plural) {
     if (max.index > static_cast<long long>(count))
-      fail_at_line(path, max.line, std::string(what) + " index " + std::to_string(max.index) +
-                                       " is out of range (the file has " + std::to_string(count) + " " +
-                                       plural + ")");
+      fail_at_line(path, max.line,
+                   std::string(what) + " index " + std::to_string(max.index) +
+                       " is out of range (the file has " + std::to_string(count) + " " + plural + ")");
   };
   check_max(max_v, raw.positions.size(), "vertex", "vertices");
   check_max(max_vt, raw.uvs.size(), "texture coordinate", "texture coordinates");
@@ -238,15 +244,18 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
 
   if (saw_group) raw.polygon_groups = std::move(groups);
   if (ignored_elements > 0)
-    raw.warnings.push_back("ignored " + std::to_string(ignored_elements) + " line and point elements ('l', 'p')");
+    raw.warnings.push_back("ignored " + std::to_string(ignored_elements) +
+                           " line and point elements ('l', 'p')");
   if (unknown_statements > 0)
-    raw.warnings.push_back("ignored " + std::to_string(unknown_statements) + " unsupported statements (first: " +
-                           quoted(first_unknown) + " on line " + std::to_string(first_unknown_line) + ")");
+    raw.warnings.push_back("ignored " + std::to_string(unknown_statements) +
+                           " unsupported statements (first: " + quoted(first_unknown) + " on line " +
+                           std::to_string(first_unknown_line) + ")");
   return raw;
 }
 
 std::string mtl_text(const std::string& texture) {
-  return "# isocharts\nnewmtl material0\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\nmap_Kd " + texture + "\n";
+  return "# isocharts\nnewmtl material0\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\nmap_Kd " + texture +
+         "\n";
 }
 
 std::string obj_text(const Mesh& m, const std::string& mtl_file, bool write_groups) {

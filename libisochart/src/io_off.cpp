@@ -63,14 +63,16 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
   if (nc < 2) fail_at_line(path, count_ln, "expected the vertex, face and edge counts");
   const long long nv = counts[0], nf = counts[1];
   if (nv < 0 || nf < 0 || nv > INT_MAX || nf > INT_MAX)
-    fail_at_line(path, count_ln, "vertex and face counts " + std::to_string(nv) + " " + std::to_string(nf) +
-                                     " are out of range");
+    fail_at_line(
+        path, count_ln,
+        "vertex and face counts " + std::to_string(nv) + " " + std::to_string(nf) + " are out of range");
   // A vertex line takes at least 6 bytes ("0 0 0\n") and a face line 8 ("3 0 1 2\n"): a
   // header claiming more than the file can hold is refused before anything is allocated.
   if (nv * 6 + nf * 8 > static_cast<long long>(lines.remaining()) + 2)
-    fail_at_line(path, count_ln, "header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
-                                     " faces, but only " + std::to_string(lines.remaining()) +
-                                     " bytes follow (truncated file or corrupt header)");
+    fail_at_line(path, count_ln,
+                 "header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
+                     " faces, but only " + std::to_string(lines.remaining()) +
+                     " bytes follow (truncated file or corrupt header)");
   check_face_limit(path, nf, options);
 
   raw.positions.reserve(nv);
@@ -82,8 +84,8 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
   double max_color = 0;
   for (long long i = 0; i < nv; ++i) {
     if (!next_content(line))
-      throw InputError(path, "unexpected end of file after " + std::to_string(i) + " of " + std::to_string(nv) +
-                                 " vertices (truncated)");
+      throw InputError(path, "unexpected end of file after " + std::to_string(i) + " of " +
+                                 std::to_string(nv) + " vertices (truncated)");
     const long long ln = lines.line_number();
     int n = 0;
     rest = line;
@@ -93,8 +95,9 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
       ++n;
     }
     if (n < fixed)
-      fail_at_line(path, ln, "vertex " + std::to_string(i) + ": expected " + std::to_string(fixed) +
-                                 " numbers, found " + std::to_string(n));
+      fail_at_line(path, ln,
+                   "vertex " + std::to_string(i) + ": expected " + std::to_string(fixed) +
+                       " numbers, found " + std::to_string(n));
     raw.positions.push_back({c[0], c[1], c[2]});
     int at = 3;
     if (with_normals) {
@@ -105,8 +108,9 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
     const int ncolor = n - fixed;
     if (colored) {
       if (ncolor != 3 && ncolor != 4)
-        fail_at_line(path, ln, "vertex " + std::to_string(i) + ": expected an r g b [a] colour after the " +
-                                   (with_normals ? "normal" : "coordinates"));
+        fail_at_line(path, ln,
+                     "vertex " + std::to_string(i) + ": expected an r g b [a] colour after the " +
+                         (with_normals ? "normal" : "coordinates"));
       raw.colors.push_back({c[at], c[at + 1], c[at + 2]});
       max_color = std::max({max_color, c[at], c[at + 1], c[at + 2]});
     }
@@ -118,8 +122,8 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
   raw.polygons.resize(static_cast<std::size_t>(nf));
   for (long long j = 0; j < nf; ++j) {
     if (!next_content(line))
-      throw InputError(path, "unexpected end of file after " + std::to_string(j) + " of " + std::to_string(nf) +
-                                 " faces (truncated)");
+      throw InputError(path, "unexpected end of file after " + std::to_string(j) + " of " +
+                                 std::to_string(nf) + " faces (truncated)");
     const long long ln = lines.line_number();
     rest = line;
     long long k = 0;
@@ -133,12 +137,14 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
     for (long long q = 0; q < k; ++q) {
       long long idx = 0;
       if (!next_token(rest, tok))
-        fail_at_line(path, ln, "face declares " + std::to_string(k) + " corners but lists " + std::to_string(q) +
-                                   " indices");
+        fail_at_line(
+            path, ln,
+            "face declares " + std::to_string(k) + " corners but lists " + std::to_string(q) + " indices");
       if (!parse_int(tok, idx)) fail_at_line(path, ln, quoted(tok) + " is not a vertex index");
       if (idx < 0 || idx >= nv)
-        fail_at_line(path, ln, "vertex index " + std::to_string(idx) + " is out of range (the file has " +
-                                   std::to_string(nv) + " vertices)");
+        fail_at_line(path, ln,
+                     "vertex index " + std::to_string(idx) + " is out of range (the file has " +
+                         std::to_string(nv) + " vertices)");
       poly[static_cast<std::size_t>(q)] = static_cast<int>(idx);
     }
     // Anything left is a face colour, which a mesh does not keep.

@@ -18,20 +18,30 @@ enum class Type { I8, U8, I16, U16, I32, U32, F32, F64 };
 
 int type_size(Type t) {
   switch (t) {
-    case Type::I8: case Type::U8: return 1;
-    case Type::I16: case Type::U16: return 2;
-    case Type::I32: case Type::U32: case Type::F32: return 4;
-    case Type::F64: return 8;
+    case Type::I8:
+    case Type::U8:
+      return 1;
+    case Type::I16:
+    case Type::U16:
+      return 2;
+    case Type::I32:
+    case Type::U32:
+    case Type::F32:
+      return 4;
+    case Type::F64:
+      return 8;
   }
   return 1;
 }
 
 bool parse_type(std::string_view s, Type& t) {
-  static const struct { const char* name; Type type; } names[] = {
-      {"char", Type::I8},   {"int8", Type::I8},    {"uchar", Type::U8},   {"uint8", Type::U8},
-      {"short", Type::I16}, {"int16", Type::I16},  {"ushort", Type::U16}, {"uint16", Type::U16},
-      {"int", Type::I32},   {"int32", Type::I32},  {"uint", Type::U32},   {"uint32", Type::U32},
-      {"float", Type::F32}, {"float32", Type::F32}, {"double", Type::F64}, {"float64", Type::F64}};
+  static const struct {
+    const char* name;
+    Type type;
+  } names[] = {{"char", Type::I8},   {"int8", Type::I8},     {"uchar", Type::U8},   {"uint8", Type::U8},
+               {"short", Type::I16}, {"int16", Type::I16},   {"ushort", Type::U16}, {"uint16", Type::U16},
+               {"int", Type::I32},   {"int32", Type::I32},   {"uint", Type::U32},   {"uint32", Type::U32},
+               {"float", Type::F32}, {"float32", Type::F32}, {"double", Type::F64}, {"float64", Type::F64}};
   for (const auto& n : names)
     if (s == n.name) {
       t = n.type;
@@ -40,7 +50,9 @@ bool parse_type(std::string_view s, Type& t) {
   return false;
 }
 
-bool is_float(Type t) { return t == Type::F32 || t == Type::F64; }
+bool is_float(Type t) {
+  return t == Type::F32 || t == Type::F64;
+}
 
 // What a property means to us.
 enum class Role { None, X, Y, Z, NX, NY, NZ, R, G, B, U, V, Indices, TexCoord };
@@ -79,10 +91,14 @@ Role vertex_role(std::string_view n) {
 // lines (one record per line), and names the record in every error.
 class RecordReader {
  public:
-  RecordReader(const std::string& path, std::string_view body, bool ascii, bool swap,
-               long long first_line)
-      : path_(path), ascii_(ascii), swap_(swap), lines_(path, body), line_offset_(first_line),
-        p_(reinterpret_cast<const unsigned char*>(body.data())), end_(p_ + body.size()) {}
+  RecordReader(const std::string& path, std::string_view body, bool ascii, bool swap, long long first_line)
+      : path_(path),
+        ascii_(ascii),
+        swap_(swap),
+        lines_(path, body),
+        line_offset_(first_line),
+        p_(reinterpret_cast<const unsigned char*>(body.data())),
+        end_(p_ + body.size()) {}
 
   void begin(const std::string& element, long long index) {
     element_ = &element;
@@ -111,14 +127,43 @@ class RecordReader {
     p_ += n;
     if (swap_) std::reverse(b, b + n);
     switch (t) {
-      case Type::I8: { std::int8_t x; std::memcpy(&x, b, 1); return x; }
-      case Type::U8: return b[0];
-      case Type::I16: { std::int16_t x; std::memcpy(&x, b, 2); return x; }
-      case Type::U16: { std::uint16_t x; std::memcpy(&x, b, 2); return x; }
-      case Type::I32: { std::int32_t x; std::memcpy(&x, b, 4); return x; }
-      case Type::U32: { std::uint32_t x; std::memcpy(&x, b, 4); return x; }
-      case Type::F32: { float x; std::memcpy(&x, b, 4); return x; }
-      case Type::F64: { double x; std::memcpy(&x, b, 8); return x; }
+      case Type::I8: {
+        std::int8_t x;
+        std::memcpy(&x, b, 1);
+        return x;
+      }
+      case Type::U8:
+        return b[0];
+      case Type::I16: {
+        std::int16_t x;
+        std::memcpy(&x, b, 2);
+        return x;
+      }
+      case Type::U16: {
+        std::uint16_t x;
+        std::memcpy(&x, b, 2);
+        return x;
+      }
+      case Type::I32: {
+        std::int32_t x;
+        std::memcpy(&x, b, 4);
+        return x;
+      }
+      case Type::U32: {
+        std::uint32_t x;
+        std::memcpy(&x, b, 4);
+        return x;
+      }
+      case Type::F32: {
+        float x;
+        std::memcpy(&x, b, 4);
+        return x;
+      }
+      case Type::F64: {
+        double x;
+        std::memcpy(&x, b, 8);
+        return x;
+      }
     }
     return 0;
   }
@@ -129,8 +174,9 @@ class RecordReader {
     if (!(c >= 0) || c != std::floor(c)) fail("invalid list length " + std::to_string(c));
     const auto n = static_cast<long long>(c);
     const long long left = ascii_ ? static_cast<long long>(rest_.size()) / 2 + 1 : (end_ - p_) / value_bytes;
-    if (n > left) fail("list of " + std::to_string(n) + " values runs past the end of the " +
-                       std::string(ascii_ ? "line" : "file (truncated)"));
+    if (n > left)
+      fail("list of " + std::to_string(n) + " values runs past the end of the " +
+           std::string(ascii_ ? "line" : "file (truncated)"));
     return n;
   }
 
@@ -184,12 +230,16 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
     if (tok == "format") {
       std::string_view f;
       next_token(rest, f);
-      if (f == "ascii") format = Format::Ascii;
-      else if (f == "binary_little_endian") format = Format::LittleEndian;
-      else if (f == "binary_big_endian") format = Format::BigEndian;
+      if (f == "ascii")
+        format = Format::Ascii;
+      else if (f == "binary_little_endian")
+        format = Format::LittleEndian;
+      else if (f == "binary_big_endian")
+        format = Format::BigEndian;
       else
-        fail_at_line(path, ln, "unknown PLY format " + quoted(f) +
-                                   " (expected ascii, binary_little_endian or binary_big_endian)");
+        fail_at_line(path, ln,
+                     "unknown PLY format " + quoted(f) +
+                         " (expected ascii, binary_little_endian or binary_big_endian)");
       saw_format = true;
     } else if (tok == "element") {
       Element e;
@@ -244,8 +294,10 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
     if (e.name == "vertex") vertex_el = &e;
     if (e.name == "face") face_el = &e;
     if (e.count > 0 && record > 0 && e.count > (static_cast<long long>(body.size()) - min_bytes) / record + 1)
-      fail_at_line(path, e.line, "header declares " + std::to_string(e.count) + " " + e.name + " elements, but only " +
-                                     std::to_string(body.size()) + " bytes of data follow (truncated file or corrupt header)");
+      fail_at_line(path, e.line,
+                   "header declares " + std::to_string(e.count) + " " + e.name + " elements, but only " +
+                       std::to_string(body.size()) +
+                       " bytes of data follow (truncated file or corrupt header)");
     min_bytes += e.count * record;
   }
   if (!vertex_el) throw InputError(path, "PLY file has no vertex element");
@@ -289,7 +341,8 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
             poly.resize(static_cast<std::size_t>(n));
             for (auto& v : poly) {
               const double x = in.read(p.type);
-              if (!(x >= 0 && x <= INT_MAX)) in.fail("vertex index " + std::to_string(static_cast<long long>(x)) + " is out of range");
+              if (!(x >= 0 && x <= INT_MAX))
+                in.fail("vertex index " + std::to_string(static_cast<long long>(x)) + " is out of range");
               v = static_cast<int>(x);
             }
           } else if (is_face && p.role == Role::TexCoord) {
@@ -315,18 +368,41 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
         // Integer colours span their type's range; float colours are in [0, 1] already.
         const double cscale = p.type == Type::U8 ? 1.0 / 255 : p.type == Type::U16 ? 1.0 / 65535 : 1.0;
         switch (p.role) {
-          case Role::X: v.x = x; break;
-          case Role::Y: v.y = x; break;
-          case Role::Z: v.z = x; break;
-          case Role::NX: if (normals) raw.normals[i].x = x; break;
-          case Role::NY: if (normals) raw.normals[i].y = x; break;
-          case Role::NZ: if (normals) raw.normals[i].z = x; break;
-          case Role::R: if (colors) raw.colors[i].x = x * cscale; break;
-          case Role::G: if (colors) raw.colors[i].y = x * cscale; break;
-          case Role::B: if (colors) raw.colors[i].z = x * cscale; break;
-          case Role::U: if (!raw.uvs.empty() && !corner_uv) raw.uvs[i].x = x; break;
-          case Role::V: if (!raw.uvs.empty() && !corner_uv) raw.uvs[i].y = x; break;
-          default: break;
+          case Role::X:
+            v.x = x;
+            break;
+          case Role::Y:
+            v.y = x;
+            break;
+          case Role::Z:
+            v.z = x;
+            break;
+          case Role::NX:
+            if (normals) raw.normals[i].x = x;
+            break;
+          case Role::NY:
+            if (normals) raw.normals[i].y = x;
+            break;
+          case Role::NZ:
+            if (normals) raw.normals[i].z = x;
+            break;
+          case Role::R:
+            if (colors) raw.colors[i].x = x * cscale;
+            break;
+          case Role::G:
+            if (colors) raw.colors[i].y = x * cscale;
+            break;
+          case Role::B:
+            if (colors) raw.colors[i].z = x * cscale;
+            break;
+          case Role::U:
+            if (!raw.uvs.empty() && !corner_uv) raw.uvs[i].x = x;
+            break;
+          case Role::V:
+            if (!raw.uvs.empty() && !corner_uv) raw.uvs[i].y = x;
+            break;
+          default:
+            break;
         }
       }
       if (is_face && corner_uv) {
@@ -368,7 +444,8 @@ std::string ply_bytes(const Mesh& m, bool binary) {
   auto put_int = [&](long long v, int bytes) {
     if (binary) {
       // Little-endian regardless of the host.
-      for (int i = 0; i < bytes; ++i) out += static_cast<char>((static_cast<unsigned long long>(v) >> (8 * i)) & 0xff);
+      for (int i = 0; i < bytes; ++i)
+        out += static_cast<char>((static_cast<unsigned long long>(v) >> (8 * i)) & 0xff);
     } else {
       append_number(out, v);
     }

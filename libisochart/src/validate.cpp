@@ -44,10 +44,16 @@ std::string text(double x) {
   std::snprintf(buf, sizeof buf, "%g", x);
   return buf;
 }
-std::string text(const Vec3d& v) { return "(" + text(v.x) + ", " + text(v.y) + ", " + text(v.z) + ")"; }
-std::string text(const Vec2d& v) { return "(" + text(v.x) + ", " + text(v.y) + ")"; }
+std::string text(const Vec3d& v) {
+  return "(" + text(v.x) + ", " + text(v.y) + ", " + text(v.z) + ")";
+}
+std::string text(const Vec2d& v) {
+  return "(" + text(v.x) + ", " + text(v.y) + ")";
+}
 
-K::Point_3 point(const Vec3d& p) { return {p.x, p.y, p.z}; }
+K::Point_3 point(const Vec3d& p) {
+  return {p.x, p.y, p.z};
+}
 
 // ---- Polygon triangulation -------------------------------------------------------------
 
@@ -68,8 +74,7 @@ void triangulate(const std::vector<Vec3d>& pos, const std::vector<int>& poly, co
   for (int i : corners) c += pos[poly[i]];
   c /= n;
   Vec3d normal;
-  for (int i = 0; i < n; ++i)
-    normal += cross(pos[poly[corners[i]]] - c, pos[poly[corners[(i + 1) % n]]] - c);
+  for (int i = 0; i < n; ++i) normal += cross(pos[poly[corners[i]]] - c, pos[poly[corners[(i + 1) % n]]] - c);
   const double ax = std::abs(normal.x), ay = std::abs(normal.y), az = std::abs(normal.z);
   const int axis = ax >= ay && ax >= az ? 0 : (ay >= az ? 1 : 2);
   auto fan = [&](int from) {
@@ -119,7 +124,8 @@ void triangulate(const std::vector<Vec3d>& pos, const std::vector<int>& poly, co
     }
     if (!clipped) {
       // Self-intersecting or numerically flat: no ear exists. Fan what is left.
-      for (int j = next[i]; next[j] != i; j = next[j]) out.push_back({corners[i], corners[j], corners[next[j]]});
+      for (int j = next[i]; next[j] != i; j = next[j])
+        out.push_back({corners[i], corners[j], corners[next[j]]});
       return;
     }
   }
@@ -133,15 +139,15 @@ void triangulate(const std::vector<Vec3d>& pos, const std::vector<int>& poly, co
 // is paired with its clockwise neighbour of opposite orientation: each pair then encloses
 // one solid wedge, and two closed surfaces touching along the edge both stay closed.
 // Left-over faces (odd counts, or no opposite neighbour) stay unglued along this edge.
-void pair_around_edge(const int* half_edges, int count, const std::vector<Face>& faces, const std::vector<Vec3d>& pos,
-                      std::vector<int>& mate) {
+void pair_around_edge(const int* half_edges, int count, const std::vector<Face>& faces,
+                      const std::vector<Vec3d>& pos, std::vector<int>& mate) {
   const int h0 = half_edges[0];
   const int a = std::min(faces[h0 / 3][h0 % 3], faces[h0 / 3][(h0 % 3 + 1) % 3]);
   const int b = std::max(faces[h0 / 3][h0 % 3], faces[h0 / 3][(h0 % 3 + 1) % 3]);
   const Vec3d d = normalized(pos[b] - pos[a]);
   const Vec3d helper = std::abs(d.x) <= std::abs(d.y) && std::abs(d.x) <= std::abs(d.z) ? Vec3d{1, 0, 0}
-                       : std::abs(d.y) <= std::abs(d.z)                                   ? Vec3d{0, 1, 0}
-                                                                                          : Vec3d{0, 0, 1};
+                       : std::abs(d.y) <= std::abs(d.z)                                 ? Vec3d{0, 1, 0}
+                                                                                        : Vec3d{0, 0, 1};
   const Vec3d e1 = normalized(cross(d, helper)), e2 = cross(d, e1);
   struct Item {
     double angle;
@@ -257,7 +263,8 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
   report.warnings = raw.warnings;
 
   // ---- Errors nothing can repair ----
-  if (raw.positions.size() > static_cast<std::size_t>(INT_MAX) / 2 || raw.polygons.size() > static_cast<std::size_t>(INT_MAX) / 3)
+  if (raw.positions.size() > static_cast<std::size_t>(INT_MAX) / 2 ||
+      raw.polygons.size() > static_cast<std::size_t>(INT_MAX) / 3)
     fail("mesh is too large");
   const int nv = static_cast<int>(raw.positions.size());
   const int np = static_cast<int>(raw.polygons.size());
@@ -272,24 +279,30 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
   if (has_colors && raw.colors.size() != raw.positions.size())
     fail(std::to_string(raw.colors.size()) + " colours for " + std::to_string(nv) + " vertices");
   if (has_uvs && raw.polygon_uvs.size() != raw.polygons.size())
-    fail("texture coordinates for " + std::to_string(raw.polygon_uvs.size()) + " of " + std::to_string(np) + " faces");
+    fail("texture coordinates for " + std::to_string(raw.polygon_uvs.size()) + " of " + std::to_string(np) +
+         " faces");
   if (has_groups && raw.polygon_groups.size() != raw.polygons.size())
     fail("groups for " + std::to_string(raw.polygon_groups.size()) + " of " + std::to_string(np) + " faces");
   for (int v = 0; v < nv; ++v) {
-    if (!is_finite(raw.positions[v])) fail("vertex " + std::to_string(v) + " has a non-finite coordinate " + text(raw.positions[v]));
-    if (has_normals && !is_finite(raw.normals[v])) fail("vertex " + std::to_string(v) + " has a non-finite normal " + text(raw.normals[v]));
-    if (has_colors && !is_finite(raw.colors[v])) fail("vertex " + std::to_string(v) + " has a non-finite colour " + text(raw.colors[v]));
+    if (!is_finite(raw.positions[v]))
+      fail("vertex " + std::to_string(v) + " has a non-finite coordinate " + text(raw.positions[v]));
+    if (has_normals && !is_finite(raw.normals[v]))
+      fail("vertex " + std::to_string(v) + " has a non-finite normal " + text(raw.normals[v]));
+    if (has_colors && !is_finite(raw.colors[v]))
+      fail("vertex " + std::to_string(v) + " has a non-finite colour " + text(raw.colors[v]));
   }
   for (std::size_t t = 0; t < raw.uvs.size(); ++t)
-    if (!is_finite(raw.uvs[t])) fail("texture coordinate " + std::to_string(t) + " is not finite " + text(raw.uvs[t]));
+    if (!is_finite(raw.uvs[t]))
+      fail("texture coordinate " + std::to_string(t) + " is not finite " + text(raw.uvs[t]));
   for (int f = 0; f < np; ++f) {
     const auto& poly = raw.polygons[f];
     if (poly.size() < 3)
-      fail("face " + std::to_string(f) + " has " + std::to_string(poly.size()) + " corners; a face needs at least 3");
+      fail("face " + std::to_string(f) + " has " + std::to_string(poly.size()) +
+           " corners; a face needs at least 3");
     for (int v : poly)
       if (v < 0 || v >= nv)
-        fail("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) + ", but there are only " +
-             std::to_string(nv) + " vertices");
+        fail("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) +
+             ", but there are only " + std::to_string(nv) + " vertices");
     if (has_uvs) {
       if (raw.polygon_uvs[f].size() != poly.size())
         fail("face " + std::to_string(f) + " has " + std::to_string(raw.polygon_uvs[f].size()) +
@@ -333,8 +346,8 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
     for (const auto& t : tris) {
       const Face v = {poly[t[0]], poly[t[1]], poly[t[2]]};
       const bool repeated = v[0] == v[1] || v[1] == v[2] || v[0] == v[2];
-      if (repeated ||
-          CGAL::collinear(point(raw.positions[v[0]]), point(raw.positions[v[1]]), point(raw.positions[v[2]]))) {
+      if (repeated || CGAL::collinear(point(raw.positions[v[0]]), point(raw.positions[v[1]]),
+                                      point(raw.positions[v[2]]))) {
         ++report.degenerate_faces;
         if (!repair)
           need_repair("face " + std::to_string(f) + " is degenerate (" +
@@ -367,8 +380,8 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
         if (!repair) {
           std::size_t first = i - 1;
           while (first > 0 && keys[first - 1].first == keys[i].first) --first;
-          need_repair("face " + std::to_string(face_source[keys[i].second]) + " has the same vertices as face " +
-                      std::to_string(face_source[keys[first].second]));
+          need_repair("face " + std::to_string(face_source[keys[i].second]) +
+                      " has the same vertices as face " + std::to_string(face_source[keys[first].second]));
         }
       }
     if (report.duplicate_faces > 0) {
@@ -412,8 +425,8 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
         if (!repair) {
           const int h = he[0];
           const int a = faces[h / 3][h % 3], b = faces[h / 3][(h % 3 + 1) % 3];
-          need_repair("edge (" + std::to_string(std::min(a, b)) + "," + std::to_string(std::max(a, b)) + ") has " +
-                      std::to_string(count) + " faces");
+          need_repair("edge (" + std::to_string(std::min(a, b)) + "," + std::to_string(std::max(a, b)) +
+                      ") has " + std::to_string(count) + " faces");
         }
         pair_around_edge(he, count, faces, raw.positions, mate);
       }
@@ -501,7 +514,8 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
         ++report.reoriented_faces;
         if (!repair)
           need_repair(open[component[f]] || flipped[component[f]] > 0
-                          ? "face " + std::to_string(face_source[f]) + " is oriented inconsistently with its neighbours"
+                          ? "face " + std::to_string(face_source[f]) +
+                                " is oriented inconsistently with its neighbours"
                           : "the closed surface through face " + std::to_string(face_source[f]) +
                                 " is oriented inward (negative volume)");
       }
@@ -664,19 +678,24 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
   if (report.degenerate_faces > 0)
     w.push_back("removed " + count(report.degenerate_faces, "degenerate face", "degenerate faces") +
                 " (repeated vertex or zero area)");
-  if (report.duplicate_faces > 0) w.push_back("removed " + count(report.duplicate_faces, "duplicate face", "duplicate faces"));
+  if (report.duplicate_faces > 0)
+    w.push_back("removed " + count(report.duplicate_faces, "duplicate face", "duplicate faces"));
   if (report.nonmanifold_edges > 0)
     w.push_back("split " + count(report.nonmanifold_edges, "non-manifold edge", "non-manifold edges") +
                 " (more than two faces)");
   if (report.nonmanifold_vertices > 0)
-    w.push_back("split " + count(report.nonmanifold_vertices, "non-manifold vertex", "non-manifold vertices") +
+    w.push_back("split " +
+                count(report.nonmanifold_vertices, "non-manifold vertex", "non-manifold vertices") +
                 " (several fans of faces)");
   if (report.cut_edges > 0)
-    w.push_back("cut " + count(report.cut_edges, "edge", "edges") + " open where no consistent orientation exists");
+    w.push_back("cut " + count(report.cut_edges, "edge", "edges") +
+                " open where no consistent orientation exists");
   if (report.reoriented_faces > 0)
-    w.push_back("reoriented " + count(report.reoriented_faces, "face", "faces") + " for a consistent, outward orientation");
+    w.push_back("reoriented " + count(report.reoriented_faces, "face", "faces") +
+                " for a consistent, outward orientation");
   if (report.unreferenced_vertices > 0)
-    w.push_back("dropped " + count(report.unreferenced_vertices, "unreferenced vertex", "unreferenced vertices"));
+    w.push_back("dropped " +
+                count(report.unreferenced_vertices, "unreferenced vertex", "unreferenced vertices"));
   return m;
 }
 

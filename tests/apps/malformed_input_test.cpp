@@ -3,14 +3,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <catch2/catch.hpp>
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "isochart/io_test_util.h"
@@ -21,7 +20,8 @@ namespace {
 
 // Runs the CLI with stdout discarded and stderr saved; returns the exit code.
 int run_cli(const std::string& args, const fs::path& err) {
-  const std::string cmd = std::string("'") + ISOCHARTS_CLI + "' " + args + " > /dev/null 2> '" + err.string() + "'";
+  const std::string cmd =
+      std::string("'") + ISOCHARTS_CLI + "' " + args + " > /dev/null 2> '" + err.string() + "'";
   const int status = std::system(cmd.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -90,44 +90,58 @@ std::vector<Case> malformed_corpus() {
   c.push_back({"garbage.ply", noise(4000, 2), "not a PLY file"});
   c.push_back({"garbage.off", "OFX 12 garbage\n" + noise(100, 3), "expected an OFF header"});
   c.push_back({"truncated.obj", kTriangleObj + "v 0 0", "expected 3 coordinates after 'v'"});
-  c.push_back({"truncated.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 # a comment long enough to pass the size check\n",
+  c.push_back({"truncated.off",
+               "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 # a comment long enough to pass the size check\n",
                "(truncated)"});
-  c.push_back({"truncated_ascii.ply",
-               "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-               "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n\n\n\n\n\n\n\n\n",
-               "vertex 2: unexpected end of file (truncated)"});
-  c.push_back({"truncated_binary.ply", binary_ply_triangle(0).substr(0, binary_ply_header(3, 1).size() + 36 + 5),
+  c.push_back(
+      {"truncated_ascii.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n\n\n\n\n\n\n\n\n",
+       "vertex 2: unexpected end of file (truncated)"});
+  c.push_back({"truncated_binary.ply",
+               binary_ply_triangle(0).substr(0, binary_ply_header(3, 1).size() + 36 + 5),
                "face 0: list of 3 values runs past the end of the file (truncated)"});
   c.push_back({"nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "coordinate 'nan' is not finite"});
   c.push_back({"inf.off", "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n", "value 'inf' is not finite"});
   c.push_back({"nan_binary.ply", binary_ply_triangle(std::nanf("")), "vertex 1 has a non-finite coordinate"});
-  c.push_back({"inf_binary.ply", binary_ply_triangle(-INFINITY), "vertex 1 has a non-finite coordinate (1, -inf, 0)"});
+  c.push_back({"inf_binary.ply", binary_ply_triangle(-INFINITY),
+               "vertex 1 has a non-finite coordinate (1, -inf, 0)"});
   c.push_back({"index_range.obj", kTriangleObj + "f 1 2 9\n", "vertex index 9 is out of range"});
   c.push_back({"index_zero.obj", kTriangleObj + "f 0 1 2\n", "vertex index 0 is invalid"});
-  c.push_back({"negative_index.obj", kTriangleObj + "f -1 -2 -9\n", "relative vertex index -9 reaches before"});
-  c.push_back({"index_range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "vertex index 3 is out of range"});
-  c.push_back({"index_range.ply",
-               "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-               "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
-               "face 0 refers to vertex 7"});
+  c.push_back(
+      {"negative_index.obj", kTriangleObj + "f -1 -2 -9\n", "relative vertex index -9 reaches before"});
+  c.push_back(
+      {"index_range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "vertex index 3 is out of range"});
+  c.push_back(
+      {"index_range.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
+       "face 0 refers to vertex 7"});
   c.push_back({"two_corners.obj", kTriangleObj + "f 1 2\n", "face has 2 corners"});
   c.push_back({"two_corners.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "face has 2 corners"});
-  c.push_back({"huge_counts.off", "OFF\n2000000000 2000000000 0\n0 0 0\n", "header declares 2000000000 vertices"});
-  c.push_back({"huge_counts.ply", binary_ply_header(2000000000, 5), "header declares 2000000000 vertex elements"});
-  c.push_back({"huge_list.ply", binary_ply_header(3, 1) + std::string(36, '\0') + le<std::uint8_t>(255) + std::string(12, '\0'),
-               "list of 255 values runs past"});
+  c.push_back(
+      {"huge_counts.off", "OFF\n2000000000 2000000000 0\n0 0 0\n", "header declares 2000000000 vertices"});
+  c.push_back(
+      {"huge_counts.ply", binary_ply_header(2000000000, 5), "header declares 2000000000 vertex elements"});
+  c.push_back(
+      {"huge_list.ply",
+       binary_ply_header(3, 1) + std::string(36, '\0') + le<std::uint8_t>(255) + std::string(12, '\0'),
+       "list of 255 values runs past"});
   c.push_back({"bad_format.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n", "unknown PLY format"});
   c.push_back({"no_end_header.ply", "ply\nformat ascii 1.0\nelement vertex 3\n", "no end_header line"});
   c.push_back({"bad_counts.off", "OFF\nthree 1 0\n", "expected the vertex, face and edge counts"});
-  c.push_back({"truncated.glb", "glTF" + le<std::uint32_t>(2) + le<std::uint32_t>(4000) + noise(40, 4), "invalid glTF"});
+  c.push_back({"truncated.glb", "glTF" + le<std::uint32_t>(2) + le<std::uint32_t>(4000) + noise(40, 4),
+               "invalid glTF"});
   c.push_back({"bad_json.gltf", "{ \"asset\": { \"version\": \"2.0\" ", "invalid glTF"});
   c.push_back({"non_utf8.gltf", "{ \"asset\xff\xfe\": 1 }", "invalid glTF"});
   c.push_back({"accessor.gltf", gltf_with_count(30), "runs past the end of its bufferView"});
   c.push_back({"all_degenerate.obj", "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\nf 1 1 2\n", "no faces left"});
   c.push_back({"no_faces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "mesh has no faces"});
   c.push_back({"points_only.obj", kTriangleObj, "mesh has no faces"});
-  c.push_back({"non_utf8.obj", kTriangleObj + "\xc3\x28\xff 1 2\nf 1 2 3\n", "'\\xc3(\\xff' is not an OBJ statement"});
-  c.push_back({"long_line.obj", kTriangleObj + std::string(3'000'000, 'x') + "\nf 1 2 3\n", "is not an OBJ statement"});
+  c.push_back({"non_utf8.obj", kTriangleObj + "\xc3\x28\xff 1 2\nf 1 2 3\n",
+               "'\\xc3(\\xff' is not an OBJ statement"});
+  c.push_back({"long_line.obj", kTriangleObj + std::string(3'000'000, 'x') + "\nf 1 2 3\n",
+               "is not an OBJ statement"});
   std::string many = "v";
   for (int i = 0; i < 500'000; ++i) many += " 1";
   c.push_back({"long_vertex.obj", many + "\n", "too many numbers after 'v'"});
@@ -150,7 +164,8 @@ TEST_CASE("malformed inputs: exit 2, one clear line, nothing left behind", "[cli
     if (c.kind == Case::Directory) fs::create_directory(input);
     const std::vector<std::string> before = entries(dir);
     const fs::path err = tmp.path / ("stderr" + std::to_string(index) + ".txt");
-    const int code = run_cli("info '" + input.string() + "' --report '" + (dir / "OUT.json").string() + "'", err);
+    const int code =
+        run_cli("info '" + input.string() + "' --report '" + (dir / "OUT.json").string() + "'", err);
     const std::string text = read_bytes(err);
     CHECK(code == 2);
     CHECK(std::count(text.begin(), text.end(), '\n') == 1);
@@ -158,7 +173,7 @@ TEST_CASE("malformed inputs: exit 2, one clear line, nothing left behind", "[cli
     CHECK_THAT(text, Catch::StartsWith("isocharts: error: "));
     CHECK_THAT(text, Catch::Contains(c.file));
     CHECK_THAT(text, Catch::Contains(c.word));
-    CHECK(text.size() < 400);  // a message, not a dump of the input
+    CHECK(text.size() < 400);       // a message, not a dump of the input
     CHECK(entries(dir) == before);  // no OUT.json, no temporary file
   }
 }
@@ -170,17 +185,22 @@ TEST_CASE("repairable inputs: warnings and exit 0, or exit 2 with --no-repair", 
     std::vector<std::string> warnings;
   };
   const std::vector<Repairable> cases = {
-      {"quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n", {"triangulated 1 polygon into 2 triangles"}},
+      {"quad.obj",
+       "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+       {"triangulated 1 polygon into 2 triangles"}},
       {"degenerate.obj", kTetraObj + "f 1 1 2\n", {"removed 1 degenerate face"}},
-      {"duplicate.off", "OFF\n4 5 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 3 2 1\n",
+      {"duplicate.off",
+       "OFF\n4 5 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 3 2 1\n",
        {"removed 1 duplicate face"}},
       {"unreferenced.obj", kTetraObj + "v 5 5 5\n", {"dropped 1 unreferenced vertex"}},
-      {"flipped.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+      {"flipped.obj",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
        {"reoriented 1 face"}},
       {"touching.obj",
        kTetraObj + "v 0 -1 0\nv 0 0 -1\nf 1 5 2\nf 1 2 6\nf 1 6 5\nf 2 5 6\n",
        {"split 1 non-manifold edge"}},
-      {"several.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 9 9 9\nf 1 2 3 4\nf 1 2 2\n",
+      {"several.obj",
+       "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 9 9 9\nf 1 2 3 4\nf 1 2 2\n",
        {"triangulated 1 polygon", "removed 1 degenerate face", "dropped 1 unreferenced vertex"}},
   };
   int index = 0;
@@ -225,6 +245,7 @@ TEST_CASE("the report is written atomically next to a good input", "[cli]") {
   CHECK(j["closed"] == true);
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt", "report.json", "tetra.obj"});
   // An unwritable report path is a clear error too.
-  CHECK(run_cli("info '" + input.string() + "' --report '" + (tmp.path / "no/dir/r.json").string() + "'", err) == 2);
+  CHECK(run_cli("info '" + input.string() + "' --report '" + (tmp.path / "no/dir/r.json").string() + "'",
+                err) == 2);
   CHECK_THAT(read_bytes(err), Catch::StartsWith("isocharts: error: ") && Catch::Contains("cannot write"));
 }

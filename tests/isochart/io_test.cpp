@@ -1,13 +1,12 @@
 #include "isochart/io.h"
 
-#include <catch2/catch.hpp>
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "isochart/error.h"
@@ -34,8 +33,9 @@ std::string glb_container(const std::string& json_text, std::string bin) {
   while (j.size() % 4) j += ' ';
   while (bin.size() % 4) bin += '\0';
   Bytes b;
-  b.put<std::uint32_t>(0x46546C67).put<std::uint32_t>(2).put<std::uint32_t>(
-      static_cast<std::uint32_t>(12 + 8 + j.size() + 8 + bin.size()));
+  b.put<std::uint32_t>(0x46546C67)
+      .put<std::uint32_t>(2)
+      .put<std::uint32_t>(static_cast<std::uint32_t>(12 + 8 + j.size() + 8 + bin.size()));
   b.put<std::uint32_t>(static_cast<std::uint32_t>(j.size())).put<std::uint32_t>(0x4E4F534A);
   b.data += j;
   b.put<std::uint32_t>(static_cast<std::uint32_t>(bin.size())).put<std::uint32_t>(0x004E4942);
@@ -48,7 +48,8 @@ std::string glb_container(const std::string& json_text, std::string bin) {
 Mesh attributed_cube() {
   std::vector<Vec3d> p;
   for (int i = 0; i < 8; ++i) p.push_back({double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1)});
-  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
   Mesh m;
   m.positions = p;
   for (int q = 0; q < 6; ++q) {
@@ -127,9 +128,9 @@ TEST_CASE("OBJ: corner forms, relative indices, polygons", "[io]") {
                                    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 1\n"
                                    "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
                                    "vn 0 0 -1\n"
-                                   "f 1/1/1 4/4/1 3/3/1 2/2/1\n"    // quad, v/vt/vn
-                                   "f 1/1 2/2 5/3\n"                // v/vt
-                                   "f -4/-3 -3/-2 -1/-1\n"          // relative
+                                   "f 1/1/1 4/4/1 3/3/1 2/2/1\n"  // quad, v/vt/vn
+                                   "f 1/1 2/2 5/3\n"              // v/vt
+                                   "f -4/-3 -3/-2 -1/-1\n"        // relative
                                    "f 3/3 4/4 5/1\n"
                                    "f 4/4 1/1 5/2\n");
   const RawMesh raw = read_raw_mesh(path);
@@ -150,16 +151,17 @@ TEST_CASE("OBJ: corner forms, relative indices, polygons", "[io]") {
 
 TEST_CASE("OBJ: colours, normals, UVs and groups", "[io]") {
   TempDir d;
-  const std::string path = d.write("b.obj",
-                                   "# comment\r\nmtllib b.mtl\r\no body\r\n"
-                                   "v 0 0 0 255 0 0\r\nv 1 0 0 0 255 0\r\nv 0 1 0 0 0 255\r\nv 0 0 1 51 51 51\r\n"
-                                   "vn 0 0 -2\r\nvn 0 0 1\r\n"
-                                   "usemtl red\r\ns 1\r\ng first\r\n"
-                                   "f 1//1 3//1 2//1 # trailing comment\r\n"
-                                   "g second\r\nf 1//2 2//2 4//2\r\n"
-                                   "g first\r\nf 1//1 4//1 3//1\r\nf 2//2 3//2 4//2\r\n"
-                                   "l 1 2\r\n"
-                                   "vendorthing 1 2 3\r\n");
+  const std::string path =
+      d.write("b.obj",
+              "# comment\r\nmtllib b.mtl\r\no body\r\n"
+              "v 0 0 0 255 0 0\r\nv 1 0 0 0 255 0\r\nv 0 1 0 0 0 255\r\nv 0 0 1 51 51 51\r\n"
+              "vn 0 0 -2\r\nvn 0 0 1\r\n"
+              "usemtl red\r\ns 1\r\ng first\r\n"
+              "f 1//1 3//1 2//1 # trailing comment\r\n"
+              "g second\r\nf 1//2 2//2 4//2\r\n"
+              "g first\r\nf 1//1 4//1 3//1\r\nf 2//2 3//2 4//2\r\n"
+              "l 1 2\r\n"
+              "vendorthing 1 2 3\r\n");
   const RawMesh raw = read_raw_mesh(path);
   REQUIRE(raw.colors.size() == 4);
   CHECK(raw.colors[1].y == Approx(1.0));  // 0-255 colours are scaled
@@ -194,9 +196,12 @@ TEST_CASE("OBJ: parse errors name the line", "[io]") {
   CHECK(err("v 1 2 1e999\n") == "line 4: '1e999' is not a number");
   CHECK(err("f 1 2\n") == "line 4: face has 2 corners; a face needs at least 3");
   CHECK(err("f 0 1 2\n") == "line 4: vertex index 0 is invalid (OBJ indices start at 1)");
-  CHECK_THAT(err("f -1 -2 -4\n"), Catch::StartsWith("line 4: relative vertex index -4 reaches before the first vertex"));
-  CHECK(err("f 1 2 3\nf 1 2 9\nf 1 2 4\n") == "line 5: vertex index 9 is out of range (the file has 3 vertices)");
-  CHECK(err("f 1/1 2/1 3/1\n") == "line 4: texture coordinate index 1 is out of range (the file has 0 texture coordinates)");
+  CHECK_THAT(err("f -1 -2 -4\n"),
+             Catch::StartsWith("line 4: relative vertex index -4 reaches before the first vertex"));
+  CHECK(err("f 1 2 3\nf 1 2 9\nf 1 2 4\n") ==
+        "line 5: vertex index 9 is out of range (the file has 3 vertices)");
+  CHECK(err("f 1/1 2/1 3/1\n") ==
+        "line 4: texture coordinate index 1 is out of range (the file has 0 texture coordinates)");
   CHECK_THAT(err("f 1/x 2 3\n"), Catch::Contains("line 4: '1/x' is not a face corner"));
   CHECK_THAT(err("f 1/1/1/1 2 3\n"), Catch::Contains("is not a face corner"));
   CHECK(err("vt 0 0\nf 1/1 2 3\n") == "line 5: face mixes corners with and without texture coordinates");
@@ -210,13 +215,18 @@ TEST_CASE("face limits are enforced", "[io]") {
   TempDir d;
   LoadOptions o;
   o.max_faces = 3;
-  CHECK_THAT(load_error(d.write("many.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 3\nf 1 2 3\nf 1 2 3\n"), o),
-             Catch::Contains("has 4 faces, more than the limit of 3"));
-  CHECK_THAT(load_error(d.write("many.off", "OFF\n3 4 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n3 0 1 2\n3 0 1 2\n"), o),
-             Catch::Contains("has 4 faces, more than the limit of 3"));
+  CHECK_THAT(
+      load_error(d.write("many.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 3\nf 1 2 3\nf 1 2 3\n"), o),
+      Catch::Contains("has 4 faces, more than the limit of 3"));
+  CHECK_THAT(
+      load_error(d.write("many.off", "OFF\n3 4 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n3 0 1 2\n3 0 1 2\n"),
+                 o),
+      Catch::Contains("has 4 faces, more than the limit of 3"));
   // A hexagon is one face in the file but four triangles.
-  CHECK_THAT(load_error(d.write("hex.obj", "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 2 0\nv -1 1 0\nf 1 2 3 4 5 6\n"), o),
-             Catch::Contains("has 4 faces, more than the limit of 3"));
+  CHECK_THAT(
+      load_error(d.write("hex.obj", "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 2 0\nv -1 1 0\nf 1 2 3 4 5 6\n"),
+                 o),
+      Catch::Contains("has 4 faces, more than the limit of 3"));
 }
 
 // ---- OFF -----------------------------------------------------------------------------------
@@ -224,30 +234,32 @@ TEST_CASE("face limits are enforced", "[io]") {
 TEST_CASE("OFF: header variants, comments, polygons and colours", "[io]") {
   TempDir d;
   SECTION("counts on the header line, comments, a quad") {
-    const RawMesh raw = read_raw_mesh(d.write("a.off", "# made by hand\nOFF 5 2 0 # counts\n\n0 0 0\n1 0 0\n1 1 0\n"
-                                                      "# a comment between vertices\n0 1 0\n0.5 0.5 1\n"
-                                                      "4 0 1 2 3\n3 0 1 4 255 0 0\n"));
+    const RawMesh raw = read_raw_mesh(d.write("a.off",
+                                              "# made by hand\nOFF 5 2 0 # counts\n\n0 0 0\n1 0 0\n1 1 0\n"
+                                              "# a comment between vertices\n0 1 0\n0.5 0.5 1\n"
+                                              "4 0 1 2 3\n3 0 1 4 255 0 0\n"));
     REQUIRE(raw.polygons.size() == 2);
     CHECK(raw.polygons[0] == std::vector<int>{0, 1, 2, 3});
     CHECK(raw.polygons[1] == std::vector<int>{0, 1, 4});
     CHECK(raw.colors.empty());
   }
   SECTION("COFF with 0-255 colours") {
-    const RawMesh raw =
-        read_raw_mesh(d.write("c.off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 51 255\n3 0 1 2\n"));
+    const RawMesh raw = read_raw_mesh(
+        d.write("c.off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 51 255\n3 0 1 2\n"));
     REQUIRE(raw.colors.size() == 3);
     CHECK(raw.colors[0].x == Approx(1.0));
     CHECK(raw.colors[2].z == Approx(0.2));
   }
   SECTION("CNOFF with normals and [0, 1] colours") {
-    const RawMesh raw = read_raw_mesh(
-        d.write("n.off", "CNOFF\n3 1 0\n0 0 0 0 0 1 0.5 0.25 1\n1 0 0 0 0 1 0 0 0\n0 1 0 0 0 1 1 1 1\n3 0 1 2\n"));
+    const RawMesh raw = read_raw_mesh(d.write(
+        "n.off", "CNOFF\n3 1 0\n0 0 0 0 0 1 0.5 0.25 1\n1 0 0 0 0 1 0 0 0\n0 1 0 0 0 1 1 1 1\n3 0 1 2\n"));
     REQUIRE(raw.normals.size() == 3);
     CHECK(raw.normals[1] == Vec3d{0, 0, 1});
     CHECK(raw.colors[0] == Vec3d{0.5, 0.25, 1});
   }
   SECTION("STOFF texture coordinates") {
-    const RawMesh raw = read_raw_mesh(d.write("t.off", "STOFF\n3 1 0\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n"));
+    const RawMesh raw =
+        read_raw_mesh(d.write("t.off", "STOFF\n3 1 0\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n"));
     REQUIRE(raw.polygon_uvs.size() == 1);
     CHECK(raw.uvs[raw.polygon_uvs[0][2]] == Vec2d{0, 1});
   }
@@ -258,12 +270,16 @@ TEST_CASE("OFF: errors name the line", "[io]") {
   auto err = [&](const std::string& text) { return load_error(d.write("bad.off", text)); };
   CHECK_THAT(err("PLY\n3 1 0\n"), Catch::Contains("line 1: expected an OFF header"));
   CHECK(err("OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n") == "line 4: vertex 1: expected 3 numbers, found 2");
-  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n") == "line 6: vertex index 5 is out of range (the file has 3 vertices)");
-  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n") == "line 6: face has 2 corners; a face needs at least 3");
-  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n") == "line 6: face declares 4 corners but lists 3 indices");
+  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n") ==
+        "line 6: vertex index 5 is out of range (the file has 3 vertices)");
+  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n") ==
+        "line 6: face has 2 corners; a face needs at least 3");
+  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n") ==
+        "line 6: face declares 4 corners but lists 3 indices");
   CHECK(err("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 # padding, so the size check passes\n") ==
         "unexpected end of file after 1 of 2 faces (truncated)");
-  CHECK_THAT(err("OFF\n2000000000 2000000000 0\n0 0 0\n"), Catch::Contains("line 2: header declares 2000000000 vertices"));
+  CHECK_THAT(err("OFF\n2000000000 2000000000 0\n0 0 0\n"),
+             Catch::Contains("line 2: header declares 2000000000 vertices"));
   CHECK_THAT(err("OFF\n-3 1 0\n"), Catch::Contains("out of range"));
   CHECK(err("OFF\n3 1 0\n0 0 inf\n1 0 0\n0 1 0\n3 0 1 2\n") == "line 3: value 'inf' is not finite");
   CHECK(err("OFF BINARY\n") == "line 1: binary OFF is not supported");
@@ -277,7 +293,8 @@ namespace {
 // faces, a list-then-scalar face record and a trailing edge element, in the given format.
 std::string ply_tetra(const std::string& format) {
   const bool ascii = format == "ascii";
-  std::string h = "ply\nformat " + format + " 1.0\ncomment test\n"
+  std::string h = "ply\nformat " + format +
+                  " 1.0\ncomment test\n"
                   "element vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
                   "property float confidence\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
                   "property float nx\nproperty float ny\nproperty float nz\n"
@@ -342,11 +359,13 @@ TEST_CASE("PLY: ascii, little and big endian read the same", "[io]") {
 
 TEST_CASE("PLY: per-vertex texture coordinates and the vertex_index name", "[io]") {
   TempDir d;
-  const RawMesh raw = read_raw_mesh(d.write("uv.ply", "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\n"
-                                                     "property float y\r\nproperty float z\r\nproperty float s\r\n"
-                                                     "property float t\r\nelement face 1\r\n"
-                                                     "property list uchar int vertex_index\r\nend_header\r\n"
-                                                     "0 0 0 0 0\r\n1 0 0 1 0\r\n0 1 0 0 1\r\n3 0 1 2\r\n"));
+  const RawMesh raw =
+      read_raw_mesh(d.write("uv.ply",
+                            "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\n"
+                            "property float y\r\nproperty float z\r\nproperty float s\r\n"
+                            "property float t\r\nelement face 1\r\n"
+                            "property list uchar int vertex_index\r\nend_header\r\n"
+                            "0 0 0 0 0\r\n1 0 0 1 0\r\n0 1 0 0 1\r\n3 0 1 2\r\n"));
   REQUIRE(raw.polygon_uvs.size() == 1);
   CHECK(raw.uvs[raw.polygon_uvs[0][1]] == Vec2d{1, 0});
 }
@@ -356,19 +375,23 @@ TEST_CASE("PLY: errors name the line or the element", "[io]") {
   const std::string full = ply_tetra("binary_little_endian");
   CHECK(load_error(d.write("t1.ply", full.substr(0, full.size() - 20))) ==
         "face 3: list of 6 values runs past the end of the file (truncated)");
-  CHECK(load_error(d.write("t0.ply", full.substr(0, full.size() - 3))) == "edge 0: unexpected end of file (truncated)");
+  CHECK(load_error(d.write("t0.ply", full.substr(0, full.size() - 3))) ==
+        "edge 0: unexpected end of file (truncated)");
   const std::string header_end = "end_header\n";
   const std::size_t body = full.find(header_end) + header_end.size();
-  CHECK_THAT(load_error(d.write("t2.ply", full.substr(0, body + 40))),
-             Catch::Contains("header declares 4 vertex elements, but only 40 bytes of data follow (truncated"));
+  CHECK_THAT(
+      load_error(d.write("t2.ply", full.substr(0, body + 40))),
+      Catch::Contains("header declares 4 vertex elements, but only 40 bytes of data follow (truncated"));
   CHECK_THAT(load_error(d.write("t3.ply", full.substr(0, body - 5))), Catch::Contains("no end_header line"));
-  CHECK_THAT(load_error(d.write("huge.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\n"
-                                            "property float x\nproperty float y\nproperty float z\nend_header\n0000")),
+  CHECK_THAT(load_error(d.write("huge.ply",
+                                "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\n"
+                                "property float x\nproperty float y\nproperty float z\nend_header\n0000")),
              Catch::Contains("line 3: header declares 2000000000 vertex elements"));
   CHECK_THAT(load_error(d.write("fmt.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n")),
              Catch::Contains("line 2: unknown PLY format 'binary_middle_endian'"));
-  const std::string ascii_head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                                 "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string ascii_head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
   CHECK(load_error(d.write("a1.ply", ascii_head + "0 0 0\n1 0\n0 1 0\n3 0 1 2\n")) ==
         "line 11: vertex 1: expected more values on this line");
   CHECK(load_error(d.write("a2.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 -2\n")) ==
@@ -398,9 +421,9 @@ struct GltfSample {
 GltfSample gltf_sample() {
   Bytes b;
   const float pos[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
-  for (const auto& p : pos) b.put(p[0]).put(p[1]).put(p[2]);                   // 0..48
-  for (int i = 0; i < 4; ++i) b.put(0.0f).put(0.0f).put(1.0f);                 // 48..96
-  for (const auto& p : pos) b.put(p[0] * 0.5f).put(p[1] * 0.25f);              // 96..128
+  for (const auto& p : pos) b.put(p[0]).put(p[1]).put(p[2]);                             // 0..48
+  for (int i = 0; i < 4; ++i) b.put(0.0f).put(0.0f).put(1.0f);                           // 48..96
+  for (const auto& p : pos) b.put(p[0] * 0.5f).put(p[1] * 0.25f);                        // 96..128
   for (int i : {0, 1, 2, 0, 2, 3}) b.put<std::uint16_t>(static_cast<std::uint16_t>(i));  // 128..140
   for (int i : {0, 1, 3, 2}) b.put<std::uint8_t>(static_cast<std::uint8_t>(i));          // 140..144
   for (int i : {0, 1, 2, 3}) b.put<std::uint32_t>(static_cast<std::uint32_t>(i));        // 144..160
@@ -421,7 +444,12 @@ GltfSample gltf_sample() {
         {{"buffer", 0}, {"byteOffset", 140}, {"byteLength", 4}},
         {{"buffer", 0}, {"byteOffset", 144}, {"byteLength", 16}}}},
       {"accessors",
-       {{{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {1, 1, 0}}},
+       {{{"bufferView", 0},
+         {"componentType", 5126},
+         {"count", 4},
+         {"type", "VEC3"},
+         {"min", {0, 0, 0}},
+         {"max", {1, 1, 0}}},
         {{"bufferView", 1}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}},
         {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
         {{"bufferView", 3}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}},
@@ -429,14 +457,17 @@ GltfSample gltf_sample() {
         {{"bufferView", 5}, {"componentType", 5125}, {"count", 4}, {"type", "SCALAR"}}}},
   };
   const json attrs = {{"POSITION", 0}, {"NORMAL", 1}, {"TEXCOORD_0", 2}};
-  doc["meshes"] = {{{"primitives", {{{"attributes", attrs}, {"indices", 3}}, {{"attributes", attrs}, {"indices", 5}, {"mode", 6}}}}},
-                   {{"primitives", {{{"attributes", attrs}, {"indices", 4}, {"mode", 5}}}}}};
+  doc["meshes"] = {
+      {{"primitives",
+        {{{"attributes", attrs}, {"indices", 3}}, {{"attributes", attrs}, {"indices", 5}, {"mode", 6}}}}},
+      {{"primitives", {{{"attributes", attrs}, {"indices", 4}, {"mode", 5}}}}}};
   return {b.data, doc};
 }
 
 std::string gltf_text(const GltfSample& s) {
   nlohmann::json doc = s.doc;
-  doc["buffers"] = {{{"byteLength", s.bin.size()}, {"uri", "data:application/octet-stream;base64," + base64(s.bin)}}};
+  doc["buffers"] = {
+      {{"byteLength", s.bin.size()}, {"uri", "data:application/octet-stream;base64," + base64(s.bin)}}};
   return doc.dump();
 }
 
@@ -460,8 +491,8 @@ TEST_CASE("glTF: primitives, modes, index types and transforms", "[io]") {
     CHECK(r->positions[6] == Vec3d{9, 1, 0});  // mirrored child: 10 - 1
     REQUIRE(r->polygons.size() == 6);
     CHECK(r->polygons[0] == std::vector<int>{0, 1, 2});
-    CHECK(r->polygons[3] == std::vector<int>{0, 2, 3});      // fan
-    CHECK(r->polygons[4] == std::vector<int>{4, 7, 5});      // strip (0,1,3) mirrored
+    CHECK(r->polygons[3] == std::vector<int>{0, 2, 3});  // fan
+    CHECK(r->polygons[4] == std::vector<int>{4, 7, 5});  // strip (0,1,3) mirrored
     CHECK(r->polygon_groups == std::vector<int>{0, 0, 1, 1, 2, 2});
     REQUIRE(r->uvs.size() == 8);
     CHECK(r->uvs[2] == Vec2d{0.5, 0.75});  // glTF v is flipped to OBJ's convention
@@ -491,8 +522,10 @@ TEST_CASE("glTF: malformed files are clear errors", "[io]") {
   GltfSample s = gltf_sample();
   CHECK_THAT(load_error(d.write("bad.gltf", "{ \"asset\": ")), Catch::StartsWith("invalid glTF"));
   const std::string glb = glb_of(s);
-  CHECK_THAT(load_error(d.write("cut.glb", glb.substr(0, glb.size() / 2))), Catch::StartsWith("invalid glTF"));
-  CHECK_THAT(load_error(d.write("junk.glb", "this is not a glb file at all")), Catch::StartsWith("invalid glTF"));
+  CHECK_THAT(load_error(d.write("cut.glb", glb.substr(0, glb.size() / 2))),
+             Catch::StartsWith("invalid glTF"));
+  CHECK_THAT(load_error(d.write("junk.glb", "this is not a glb file at all")),
+             Catch::StartsWith("invalid glTF"));
   s.doc["accessors"][0]["count"] = 400;
   CHECK_THAT(load_error(d.write("count.glb", glb_of(s))),
              Catch::Contains("mesh 0 primitive 0 POSITION (accessor 0) runs past the end of its bufferView"));
@@ -509,7 +542,8 @@ TEST_CASE("glTF: malformed files are clear errors", "[io]") {
   CHECK_THAT(load_error(d.write("draco.glb", glb_of(s))), Catch::Contains("unsupported extension"));
   LoadOptions o;
   o.max_faces = 3;  // the fan would be faces 3 and 4
-  CHECK_THAT(load_error(d.write("limit.glb", glb_of(gltf_sample())), o), Catch::Contains("has 4 faces, more than the limit of 3"));
+  CHECK_THAT(load_error(d.write("limit.glb", glb_of(gltf_sample())), o),
+             Catch::Contains("has 4 faces, more than the limit of 3"));
 }
 
 // ---- Writers -------------------------------------------------------------------------------
@@ -533,7 +567,8 @@ TEST_CASE("PLY round trips, binary and ASCII", "[io]") {
     o.binary_ply = binary;
     const std::string path = d.file(binary ? "b.ply" : "a.ply");
     save_mesh(m, path, o);
-    CHECK(read_bytes(path).find(binary ? "format binary_little_endian" : "format ascii") != std::string::npos);
+    CHECK(read_bytes(path).find(binary ? "format binary_little_endian" : "format ascii") !=
+          std::string::npos);
     const LoadResult r = load_mesh(path);
     CHECK(r.report.warnings.empty());
     Mesh expect = m;

@@ -29,7 +29,9 @@ inline std::string read_bytes(const fs::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-inline void write_bytes(const fs::path& p, const std::string& data) { std::ofstream(p, std::ios::binary) << data; }
+inline void write_bytes(const fs::path& p, const std::string& data) {
+  std::ofstream(p, std::ios::binary) << data;
+}
 
 /// A fresh directory under the system temp directory, removed with everything in it.
 struct TempDir {

@@ -1,6 +1,5 @@
 // Every mesh of ../shared/data/meshes loads with the counts and topology of its MANIFEST.
 #include <catch2/catch.hpp>
-
 #include <filesystem>
 #include <set>
 
@@ -21,16 +20,18 @@ struct Expected {
 
 // From ../shared/data/MANIFEST.md. All are single-component triangle meshes.
 const Expected kMeshes[] = {
-    {"bunny.obj", 69451, 35947, 34834, 5, 0},      {"bunny_lowres.off", 6966, 3485, 3485, 0, 0},
-    {"horse.ply", 96966, 48485, 48485, 0, 0},      {"feline.off", 99732, 49864, 49864, 0, 2},
-    {"dino.off", 47960, 23980, 23980, 0, 0},       {"gargoyle.off", 100000, 50002, 50002, 0, 0},
-    {"skull.obj", 100002, 49999, 49999, 0, 2},     {"hand.obj", 15982, 7993, 7993, 0, 0},
-    {"face_mask.off", 62460, 31756, 31756, 1, 0},  {"armadillo.obj", 86482, 43243, 43243, 0, 0},
-    {"fandisk.obj", 12946, 6475, 6475, 0, 0},      {"fertility.off", 9000, 4494, 4494, 0, 4},
-    {"eight.off", 1536, 766, 766, 0, 2},           {"plane_holes.obj", 16747, 8519, 8519, 27, 0},
+    {"bunny.obj", 69451, 35947, 34834, 5, 0},     {"bunny_lowres.off", 6966, 3485, 3485, 0, 0},
+    {"horse.ply", 96966, 48485, 48485, 0, 0},     {"feline.off", 99732, 49864, 49864, 0, 2},
+    {"dino.off", 47960, 23980, 23980, 0, 0},      {"gargoyle.off", 100000, 50002, 50002, 0, 0},
+    {"skull.obj", 100002, 49999, 49999, 0, 2},    {"hand.obj", 15982, 7993, 7993, 0, 0},
+    {"face_mask.off", 62460, 31756, 31756, 1, 0}, {"armadillo.obj", 86482, 43243, 43243, 0, 0},
+    {"fandisk.obj", 12946, 6475, 6475, 0, 0},     {"fertility.off", 9000, 4494, 4494, 0, 4},
+    {"eight.off", 1536, 766, 766, 0, 2},          {"plane_holes.obj", 16747, 8519, 8519, 27, 0},
 };
 
-std::string mesh_path(const std::string& name) { return std::string(ISOCHARTS_SHARED_DATA) + "/meshes/" + name; }
+std::string mesh_path(const std::string& name) {
+  return std::string(ISOCHARTS_SHARED_DATA) + "/meshes/" + name;
+}
 
 }  // namespace
 

@@ -1,8 +1,7 @@
 #include "isochart/validate.h"
 
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
 #include <set>
@@ -68,7 +67,9 @@ void check_clean(const Mesh& m) {
   CHECK(t.num_referenced_vertices() == m.num_vertices());
 }
 
-Mesh validate(const RawMesh& r, ValidationReport& rep, bool repair = true) { return validate_mesh(r, repair, rep); }
+Mesh validate(const RawMesh& r, ValidationReport& rep, bool repair = true) {
+  return validate_mesh(r, repair, rep);
+}
 
 std::string error_of(const RawMesh& r, bool repair) {
   ValidationReport rep;
@@ -129,8 +130,17 @@ TEST_CASE("polygons are triangulated without flips or lost area", "[validate]") 
   // middle of one side (a collinear corner must still be used, not create a T-junction).
   const double s = std::sqrt(0.5);
   auto tilt = [&](double x, double y) { return Vec3d{x, y * s, y * s}; };
-  RawMesh r = raw_of({tilt(0, 0), tilt(2, 0), tilt(2, 1), tilt(1, 1), tilt(1, 2), tilt(0, 2), {5, 0, 0}, {6, 0, 0},
-                      {7, 0, 0}, {7, 1, 0}, {5, 1, 0}},
+  RawMesh r = raw_of({tilt(0, 0),
+                      tilt(2, 0),
+                      tilt(2, 1),
+                      tilt(1, 1),
+                      tilt(1, 2),
+                      tilt(0, 2),
+                      {5, 0, 0},
+                      {6, 0, 0},
+                      {7, 0, 0},
+                      {7, 1, 0},
+                      {5, 1, 0}},
                      {{0, 1, 2, 3, 4, 5}, {6, 7, 8, 9, 10}});
   ValidationReport rep;
   const Mesh m = validate(r, rep);
@@ -217,7 +227,8 @@ TEST_CASE("unreferenced vertices are dropped and attributes remapped", "[validat
   REQUIRE(m.uvs.size() == 3);  // the unused (0.5, 0.5) is dropped too
   CHECK(m.uvs[m.face_uvs[0][1]] == Vec2d{1, 0});
   CHECK(m.face_groups == std::vector<int>{7});
-  CHECK_THAT(error_of(r, false), Catch::Contains("vertex 0 is used by no face") && Catch::Contains("use repair"));
+  CHECK_THAT(error_of(r, false),
+             Catch::Contains("vertex 0 is used by no face") && Catch::Contains("use repair"));
 }
 
 TEST_CASE("two closed surfaces touching along an edge are split apart, both closed", "[validate]") {
@@ -225,7 +236,8 @@ TEST_CASE("two closed surfaces touching along an edge are split apart, both clos
   RawMesh r = tetrahedron();
   r.positions.push_back({0, -1, 0});
   r.positions.push_back({0, 0, -1});
-  for (const auto& f : std::vector<std::vector<int>>{{0, 4, 1}, {0, 1, 5}, {0, 5, 4}, {1, 4, 5}}) r.polygons.push_back(f);
+  for (const auto& f : std::vector<std::vector<int>>{{0, 4, 1}, {0, 1, 5}, {0, 5, 4}, {1, 4, 5}})
+    r.polygons.push_back(f);
   ValidationReport rep;
   const Mesh m = validate(r, rep);
   CHECK(rep.nonmanifold_edges == 1);
@@ -242,8 +254,8 @@ TEST_CASE("two closed surfaces touching along an edge are split apart, both clos
 }
 
 TEST_CASE("a fin on an edge is separated into a manifold", "[validate]") {
-  RawMesh r = raw_of({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5, 0.5, 1}},
-                     {{0, 1, 2}, {0, 2, 3}, {0, 2, 4}});
+  RawMesh r =
+      raw_of({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5, 0.5, 1}}, {{0, 1, 2}, {0, 2, 3}, {0, 2, 4}});
   ValidationReport rep;
   const Mesh m = validate(r, rep);
   CHECK(rep.nonmanifold_edges == 1);
@@ -257,7 +269,8 @@ TEST_CASE("two solids sharing one vertex are split at it", "[validate]") {
   r.positions.push_back({-1, 0, 0});
   r.positions.push_back({0, -1, 0});
   r.positions.push_back({0, 0, -1});
-  for (const auto& f : std::vector<std::vector<int>>{{0, 4, 5}, {0, 6, 4}, {0, 5, 6}, {4, 6, 5}}) r.polygons.push_back(f);
+  for (const auto& f : std::vector<std::vector<int>>{{0, 4, 5}, {0, 6, 4}, {0, 5, 6}, {4, 6, 5}})
+    r.polygons.push_back(f);
   ValidationReport rep;
   const Mesh m = validate(r, rep);
   CHECK(rep.nonmanifold_vertices == 1);
@@ -288,7 +301,8 @@ TEST_CASE("orientation is made consistent and outward", "[validate]") {
   m = validate(inside, rep);
   CHECK(rep.reoriented_faces == 12);
   CHECK(signed_volume(m) == Approx(1.0));
-  for (int v = 0; v < m.num_vertices(); ++v) CHECK(dot(m.normals[v], m.positions[v] - Vec3d{0.5, 0.5, 0.5}) > 0);
+  for (int v = 0; v < m.num_vertices(); ++v)
+    CHECK(dot(m.normals[v], m.positions[v] - Vec3d{0.5, 0.5, 0.5}) > 0);
   // UVs follow their corners through the flip.
   for (int f = 0; f < m.num_faces(); ++f) CHECK(m.uvs[m.face_uvs[f][1]] == Vec2d{0, 1});
   CHECK_THAT(error_of(inside, false), Catch::Contains("oriented inward"));
@@ -323,7 +337,8 @@ TEST_CASE("a Moebius strip is cut open into an orientable surface", "[validate]"
   for (int i = 0; i < n; ++i) {
     const double t = 2 * pi * i / n;
     const Vec3d c{std::cos(t), std::sin(t), 0};
-    const Vec3d w = Vec3d{std::cos(t) * std::cos(t / 2), std::sin(t) * std::cos(t / 2), std::sin(t / 2)} * 0.3;
+    const Vec3d w =
+        Vec3d{std::cos(t) * std::cos(t / 2), std::sin(t) * std::cos(t / 2), std::sin(t / 2)} * 0.3;
     p.push_back(c + w);
     p.push_back(c - w);
   }

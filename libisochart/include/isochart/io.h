@@ -36,8 +36,8 @@ struct LoadOptions {
 };
 
 struct LoadResult {
-  Mesh mesh;                  ///< validated (and repaired) mesh
-  ValidationReport report;    ///< what was found in the input and what was repaired
+  Mesh mesh;                ///< validated (and repaired) mesh
+  ValidationReport report;  ///< what was found in the input and what was repaired
 };
 
 /// Reads, validates and (by default) repairs a mesh. The whole file is read at once; header
