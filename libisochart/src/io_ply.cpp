@@ -54,6 +54,13 @@ bool is_float(Type t) {
   return t == Type::F32 || t == Type::F64;
 }
 
+bool host_is_little_endian() {
+  const std::uint16_t one = 1;
+  unsigned char first;
+  std::memcpy(&first, &one, 1);
+  return first == 1;
+}
+
 // What a property means to us.
 enum class Role { None, X, Y, Z, NX, NY, NZ, R, G, B, U, V, Indices, TexCoord };
 
@@ -326,7 +333,7 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
     if (corner_uv) raw.polygon_uvs.resize(raw.polygons.size());
   }
 
-  const bool swap = format == Format::BigEndian;
+  const bool swap = format != Format::Ascii && (format == Format::LittleEndian) != host_is_little_endian();
   RecordReader in(path, body, format == Format::Ascii, swap, header_lines);
   for (const auto& e : elements) {
     const bool is_vertex = &e == vertex_el, is_face = &e == face_el;
@@ -431,23 +438,23 @@ std::string ply_bytes(const Mesh& m, bool binary) {
   if (uv) out += "property list uchar float texcoord\n";
   out += "end_header\n";
 
-  auto put_float = [&](double v) {
-    const auto f = static_cast<float>(v);
-    if (binary) {
-      char b[4];
-      std::memcpy(b, &f, 4);
-      out.append(b, 4);
-    } else {
-      append_number(out, f);
-    }
-  };
   auto put_int = [&](long long v, int bytes) {
     if (binary) {
-      // Little-endian regardless of the host.
+      // Little-endian whatever the host.
       for (int i = 0; i < bytes; ++i)
         out += static_cast<char>((static_cast<unsigned long long>(v) >> (8 * i)) & 0xff);
     } else {
       append_number(out, v);
+    }
+  };
+  auto put_float = [&](double v) {
+    const auto f = static_cast<float>(v);
+    if (binary) {
+      std::uint32_t bits;
+      std::memcpy(&bits, &f, 4);
+      put_int(bits, 4);
+    } else {
+      append_number(out, f);
     }
   };
   auto sep = [&](char c) {
