@@ -564,6 +564,7 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
     }
     if (clashes.empty()) break;
     if (parent_edge.empty()) parent_edge.assign(3 * static_cast<std::size_t>(nf), -2);
+    int cuts = 0;
     for (const auto& [h1, h2] : clashes) {
       // Both faces have a corner at the output vertex x where h1 starts: walk x's fan from
       // h1's corner to the other face's corner and cut the middle edge of that walk.
@@ -589,22 +590,24 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
           bfs.push_back(nc);
         }
       }
-      if (goal < 0) throw Error("internal: fan walk failed at vertex " + std::to_string(v));
       std::vector<int> path;
-      for (int c = goal; parent_edge[c] >= 0;) {
+      for (int c = goal; c >= 0 && parent_edge[c] >= 0;) {
         const int h = parent_edge[c];
         path.push_back(h);
         c = corner_at(faces, h / 3, h % 3, v);
       }
-      if (path.empty()) throw Error("internal: empty fan path at vertex " + std::to_string(v));
       for (int c : bfs) parent_edge[c] = -2;
+      // No path: a cut made earlier in this round already separated the two faces.
+      if (path.empty()) continue;
       const int cut = path[path.size() / 2];
-      if (mate[cut] >= 0) {
-        mate[mate[cut]] = -1;
-        mate[cut] = -1;
-        ++report.cut_edges;
-      }
+      mate[mate[cut]] = -1;
+      mate[cut] = -1;
+      ++report.cut_edges;
+      ++cuts;
     }
+    // A fresh round always reaches its first clash, so every round cuts; this only guards
+    // against looping forever should that reasoning ever break.
+    if (cuts == 0) throw Error("internal: vertex splitting made no progress");
   }
 
   // ---- Output: flip, drop unreferenced vertices, carry attributes ----
