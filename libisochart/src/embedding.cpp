@@ -1,0 +1,296 @@
+#include "isochart/embedding.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Dense>
+#include <Spectra/MatOp/DenseSymMatProd.h>
+#include <Spectra/SymEigsSolver.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "isochart/error.h"
+
+namespace isochart {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Vertices per task in the per-vertex loops: big enough to stream the q rows through the cache
+// in runs, small enough to balance two threads on a few-thousand-vertex chart.
+constexpr int kVertexChunk = 256;
+
+// Below this many landmarks the dense solver wins over Lanczos (see bench/geodesic_bench.cpp).
+constexpr int kMinLanczosSize = 64;
+
+// Eigenvalues at or below this fraction of the largest are noise: the marching stores its
+// geometry in float (1e-7 relative), and a flat grid's third eigenvalue measured 2e-9·λ1.
+constexpr double kRelativeEigenvalueFloor = 1e-6;
+
+std::vector<int> referenced_vertices(const GeodesicSolver& solver) {
+  std::vector<int> ref;
+  for (int v = 0; v < solver.num_vertices(); ++v)
+    if (solver.is_referenced(v)) ref.push_back(v);
+  if (ref.empty()) throw InputError("", "embedding: the mesh has no faces");
+  return ref;
+}
+
+// Index into `ref` of the vertex with the largest `field` value (the first one on ties).
+int argmax(const std::vector<int>& ref, const std::vector<double>& field) {
+  int best = ref.front();
+  for (int v : ref)
+    if (field[v] > field[best]) best = v;
+  return best;
+}
+
+[[noreturn]] void throw_disconnected(int v, int from) {
+  throw Error("embedding: vertex " + std::to_string(v) + " cannot be reached from vertex " +
+              std::to_string(from) +
+              " over the surface; the mesh has several components, embed each separately");
+}
+
+void check_reached(const std::vector<int>& ref, const double* row, int from) {
+  for (int v : ref)
+    if (!std::isfinite(row[v])) throw_disconnected(v, from);
+}
+
+// Top `nev` eigenpairs of the symmetric q × q matrix `b`, descending. Lanczos (Spectra) for
+// larger q, with a dense fallback should it not converge.
+void top_eigenpairs(const Eigen::MatrixXd& b, int nev, Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
+  const int q = static_cast<int>(b.rows());
+  if (q >= kMinLanczosSize && nev < q) {
+    Spectra::DenseSymMatProd<double> op(b);
+    const int ncv = std::min(q, std::max(2 * nev + 1, 20));
+    Spectra::SymEigsSolver<Spectra::DenseSymMatProd<double>> eigs(op, nev, ncv);
+    eigs.init();
+    eigs.compute(Spectra::SortRule::LargestAlge, 1000, 1e-12);
+    if (eigs.info() == Spectra::CompInfo::Successful) {
+      values = eigs.eigenvalues();
+      vectors = eigs.eigenvectors();
+      return;
+    }
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(b);
+  if (es.info() != Eigen::Success) throw Error("embedding: the eigen solver failed");
+  // Eigen sorts ascending.
+  values = es.eigenvalues().tail(nev).reverse();
+  vectors = es.eigenvectors().rightCols(nev).rowwise().reverse();
+}
+
+}  // namespace
+
+std::vector<int> choose_landmarks(const GeodesicSolver& solver, int count, LandmarkMethod method,
+                                  std::vector<double>* rows) {
+  if (rows) rows->clear();
+  if (count < 1) throw InputError("", "embedding: landmark count must be at least 1, got " + std::to_string(count));
+  const std::vector<int> ref = referenced_vertices(solver);
+  if (count >= static_cast<int>(ref.size())) return ref;
+
+  const std::vector<Vec3d>& x = solver.positions();
+  Vec3d centroid;
+  for (int v : ref) centroid += x[v];
+  centroid /= static_cast<double>(ref.size());
+  int seed = ref.front();
+  double far = -1;
+  for (int v : ref) {
+    const double d = squared_norm(x[v] - centroid);
+    if (d > far) far = d, seed = v;
+  }
+
+  const std::size_t nv = static_cast<std::size_t>(solver.num_vertices());
+  std::vector<int> landmarks{seed};
+  landmarks.reserve(count);
+  std::vector<double> field(nv, GeodesicSolver::inf);
+  switch (method) {
+    case LandmarkMethod::FastGeodesicFps:
+      solver.lower_distances(seed, field);
+      check_reached(ref, field.data(), seed);
+      while (static_cast<int>(landmarks.size()) < count) {
+        const int next = argmax(ref, field);
+        landmarks.push_back(next);
+        solver.lower_distances(next, field);
+      }
+      break;
+    case LandmarkMethod::GeodesicFps: {
+      std::vector<double> local;
+      std::vector<double>& r = rows ? *rows : local;
+      r.assign(static_cast<std::size_t>(count) * nv, 0.0);
+      for (int k = 0;; ++k) {
+        double* row = r.data() + k * nv;
+        solver.distances(&landmarks[k], 1, row);
+        if (k == 0) check_reached(ref, row, seed);
+        for (int v : ref) field[v] = std::min(field[v], row[v]);
+        if (k + 1 == count) break;
+        landmarks.push_back(argmax(ref, field));
+      }
+      break;
+    }
+    case LandmarkMethod::EuclideanFps:
+      while (true) {
+        const Vec3d& p = x[landmarks.back()];
+        for (int v : ref) field[v] = std::min(field[v], norm(x[v] - p));
+        if (static_cast<int>(landmarks.size()) == count) break;
+        landmarks.push_back(argmax(ref, field));
+      }
+      break;
+  }
+  return landmarks;
+}
+
+Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& options) {
+  if (options.landmarks < 2)
+    throw InputError("", "embedding: landmarks must be at least 2, got " + std::to_string(options.landmarks));
+  if (options.max_dimensions < 1)
+    throw InputError("", "embedding: max_dimensions must be at least 1, got " +
+                             std::to_string(options.max_dimensions));
+  Embedding e;
+  const int nv = solver.num_vertices();
+  e.num_vertices = nv;
+  const std::vector<int> ref = referenced_vertices(solver);
+
+  auto t0 = Clock::now();
+  std::vector<double> rows;
+  e.landmarks = choose_landmarks(solver, options.landmarks, options.landmark_method, &rows);
+  e.seconds_landmarks = seconds_since(t0);
+  const int q = static_cast<int>(e.landmarks.size());
+
+  t0 = Clock::now();
+  if (rows.empty()) rows = solver.distance_rows(e.landmarks);
+  check_reached(ref, rows.data(), e.landmarks[0]);
+  e.landmark_distances = std::move(rows);
+  e.seconds_rows = seconds_since(t0);
+
+  t0 = Clock::now();
+  const std::size_t stride = static_cast<std::size_t>(nv);
+  // The front from landmark i reaching j and the one from j reaching i differ by the marching
+  // error; both entries get their mean, so that D is symmetric and the rows agree with it
+  // (place_points on a landmark's own row then gives back its coordinates exactly).
+  double* dist = e.landmark_distances.data();
+  for (int i = 0; i < q; ++i)
+    for (int j = 0; j < i; ++j) {
+      double& a = dist[i * stride + e.landmarks[j]];
+      double& b = dist[j * stride + e.landmarks[i]];
+      a = b = 0.5 * (a + b);
+    }
+  Eigen::MatrixXd d2(q, q);
+  for (int i = 0; i < q; ++i)
+    for (int j = 0; j < q; ++j) {
+      const double a = dist[i * stride + e.landmarks[j]];
+      d2(i, j) = i == j ? 0.0 : a * a;
+    }
+  const Eigen::VectorXd row_mean = d2.rowwise().mean();
+  const double total_mean = row_mean.mean();
+  Eigen::MatrixXd b(q, q);
+  for (int i = 0; i < q; ++i)
+    for (int j = 0; j < q; ++j) b(i, j) = -0.5 * (d2(i, j) - row_mean[i] - row_mean[j] + total_mean);
+  e.eigenvalue_sum = b.trace();
+  e.mean_squared_distances.assign(row_mean.data(), row_mean.data() + q);
+
+  const int nev = std::min(options.max_dimensions, q);
+  Eigen::VectorXd values;
+  Eigen::MatrixXd vectors;
+  top_eigenpairs(b, nev, values, vectors);
+  for (int j = 0; j < values.size(); ++j) {
+    if (!(values[j] > 0) || values[j] <= kRelativeEigenvalueFloor * values[0]) break;
+    e.eigenvalues.push_back(values[j]);
+  }
+  e.dimensions = static_cast<int>(e.eigenvalues.size());
+  const int dims = e.dimensions;
+  e.eigenvectors.resize(static_cast<std::size_t>(dims) * q);
+  for (int j = 0; j < dims; ++j) {
+    int big = 0;
+    for (int k = 1; k < q; ++k)
+      if (std::abs(vectors(k, j)) > std::abs(vectors(big, j))) big = k;
+    const double sign = vectors(big, j) < 0 ? -1.0 : 1.0;
+    for (int k = 0; k < q; ++k) e.eigenvectors[j * q + k] = sign * vectors(k, j);
+  }
+
+  // Placement (§5.2.1) for every vertex, rows streamed in chunks of vertices; the sum over
+  // landmarks runs in a fixed order, so chunking and threads do not change the result.
+  e.coordinates.assign(stride * dims, 0.0);
+  std::vector<double> scale(dims);
+  for (int j = 0; j < dims; ++j) scale[j] = 0.5 / std::sqrt(e.eigenvalues[j]);
+  const int num_chunks = (nv + kVertexChunk - 1) / kVertexChunk;
+  tbb::parallel_for(tbb::blocked_range<int>(0, num_chunks), [&](const tbb::blocked_range<int>& r) {
+    std::vector<double> acc;
+    for (int chunk = r.begin(); chunk != r.end(); ++chunk) {
+      const int first = chunk * kVertexChunk, last = std::min(nv, first + kVertexChunk);
+      acc.assign(static_cast<std::size_t>(last - first) * dims, 0.0);
+      for (int k = 0; k < q; ++k) {
+        const double* row = dist + k * stride;
+        const double mean = e.mean_squared_distances[k];
+        for (int i = first; i < last; ++i) {
+          if (!std::isfinite(row[i])) continue;
+          const double t = mean - row[i] * row[i];
+          double* a = &acc[static_cast<std::size_t>(i - first) * dims];
+          for (int j = 0; j < dims; ++j) a[j] += e.eigenvectors[j * q + k] * t;
+        }
+      }
+      for (int i = first; i < last; ++i) {
+        if (!solver.is_referenced(i)) continue;
+        for (int j = 0; j < dims; ++j)
+          e.coordinates[i * static_cast<std::size_t>(dims) + j] =
+              scale[j] * acc[static_cast<std::size_t>(i - first) * dims + j];
+      }
+    }
+  });
+  for (int k = 0; k < q; ++k)
+    for (int j = 0; j < dims; ++j)
+      e.coordinates[e.landmarks[k] * static_cast<std::size_t>(dims) + j] =
+          std::sqrt(e.eigenvalues[j]) * e.eigenvectors[j * q + k];
+  e.seconds_spectral = seconds_since(t0);
+  return e;
+}
+
+void place_points(const Embedding& e, int dims, const double* squared_distances_to_landmarks, double* out) {
+  if (dims < 0 || dims > e.dimensions)
+    throw Error("place_points: dims " + std::to_string(dims) + " outside [0, " +
+                std::to_string(e.dimensions) + "]");
+  const int q = static_cast<int>(e.landmarks.size());
+  for (int j = 0; j < dims; ++j) {
+    double s = 0;
+    for (int k = 0; k < q; ++k)
+      s += e.eigenvectors[j * q + k] * (e.mean_squared_distances[k] - squared_distances_to_landmarks[k]);
+    out[j] = 0.5 * s / std::sqrt(e.eigenvalues[j]);
+  }
+}
+
+std::vector<double> gdd(const Embedding& e, int dims) {
+  if (dims < 0 || dims > e.dimensions)
+    throw Error("gdd: dims " + std::to_string(dims) + " outside [0, " + std::to_string(e.dimensions) + "]");
+  const int nv = e.num_vertices;
+  const int q = static_cast<int>(e.landmarks.size());
+  const std::size_t stride = static_cast<std::size_t>(nv);
+  const int dim_stride = e.dimensions;
+  std::vector<double> out(stride, 0.0);
+  if (q < 2) return out;
+  const int num_chunks = (nv + kVertexChunk - 1) / kVertexChunk;
+  tbb::parallel_for(tbb::blocked_range<int>(0, num_chunks), [&](const tbb::blocked_range<int>& r) {
+    for (int chunk = r.begin(); chunk != r.end(); ++chunk) {
+      const int first = chunk * kVertexChunk, last = std::min(nv, first + kVertexChunk);
+      for (int k = 0; k < q; ++k) {
+        const double* row = e.landmark_distances.data() + k * stride;
+        const double* yl = e.coordinates.data() + e.landmarks[k] * static_cast<std::size_t>(dim_stride);
+        for (int i = first; i < last; ++i) {
+          if (!std::isfinite(row[i])) continue;
+          const double* yi = e.coordinates.data() + i * static_cast<std::size_t>(dim_stride);
+          double s = 0;
+          for (int j = 0; j < dims; ++j) s += (yi[j] - yl[j]) * (yi[j] - yl[j]);
+          const double diff = std::sqrt(s) - row[i];
+          out[i] += diff * diff;
+        }
+      }
+      for (int i = first; i < last; ++i) out[i] = std::sqrt(out[i] / (q - 1));
+    }
+  });
+  return out;
+}
+
+}  // namespace isochart
