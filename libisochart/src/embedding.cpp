@@ -2,6 +2,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <Eigen/Dense>
 #include <Spectra/MatOp/DenseSymMatProd.h>
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <string>
 
 #include "isochart/error.h"
@@ -86,12 +88,20 @@ void top_eigenpairs(const Eigen::MatrixXd& b, int nev, Eigen::VectorXd& values, 
 
 }  // namespace
 
-std::vector<int> choose_landmarks(const GeodesicSolver& solver, int count, LandmarkMethod method,
-                                  std::vector<double>* rows) {
+namespace {
+
+// choose_landmarks, calling `chosen(k, vertex)` (in the calling thread) as soon as landmark k is
+// fixed, so that its distance row can be computed while the sampling goes on.
+std::vector<int> sample_landmarks(const GeodesicSolver& solver, int count, LandmarkMethod method,
+                                  std::vector<double>* rows, const std::function<void(int, int)>& chosen) {
   if (rows) rows->clear();
   if (count < 1) throw InputError("", "embedding: landmark count must be at least 1, got " + std::to_string(count));
   const std::vector<int> ref = referenced_vertices(solver);
-  if (count >= static_cast<int>(ref.size())) return ref;
+  if (count >= static_cast<int>(ref.size())) {
+    if (chosen)
+      for (std::size_t k = 0; k < ref.size(); ++k) chosen(static_cast<int>(k), ref[k]);
+    return ref;
+  }
 
   const std::vector<Vec3d>& x = solver.positions();
   Vec3d centroid;
@@ -107,41 +117,54 @@ std::vector<int> choose_landmarks(const GeodesicSolver& solver, int count, Landm
   const std::size_t nv = static_cast<std::size_t>(solver.num_vertices());
   std::vector<int> landmarks{seed};
   landmarks.reserve(count);
+  auto add = [&](int v) {
+    landmarks.push_back(v);
+    if (chosen) chosen(static_cast<int>(landmarks.size()) - 1, v);
+  };
   std::vector<double> field(nv, GeodesicSolver::inf);
   switch (method) {
     case LandmarkMethod::FastGeodesicFps:
       solver.lower_distances(seed, field);
       check_reached(ref, field.data(), seed);
+      if (chosen) chosen(0, seed);
       while (static_cast<int>(landmarks.size()) < count) {
-        const int next = argmax(ref, field);
-        landmarks.push_back(next);
-        solver.lower_distances(next, field);
+        add(argmax(ref, field));
+        solver.lower_distances(landmarks.back(), field);
       }
       break;
     case LandmarkMethod::GeodesicFps: {
       std::vector<double> local;
       std::vector<double>& r = rows ? *rows : local;
       r.assign(static_cast<std::size_t>(count) * nv, 0.0);
+      if (chosen) chosen(0, seed);
       for (int k = 0;; ++k) {
         double* row = r.data() + k * nv;
         solver.distances(&landmarks[k], 1, row);
         if (k == 0) check_reached(ref, row, seed);
         for (int v : ref) field[v] = std::min(field[v], row[v]);
         if (k + 1 == count) break;
-        landmarks.push_back(argmax(ref, field));
+        add(argmax(ref, field));
       }
       break;
     }
     case LandmarkMethod::EuclideanFps:
+      if (chosen) chosen(0, seed);
       while (true) {
         const Vec3d& p = x[landmarks.back()];
         for (int v : ref) field[v] = std::min(field[v], norm(x[v] - p));
         if (static_cast<int>(landmarks.size()) == count) break;
-        landmarks.push_back(argmax(ref, field));
+        add(argmax(ref, field));
       }
       break;
   }
   return landmarks;
+}
+
+}  // namespace
+
+std::vector<int> choose_landmarks(const GeodesicSolver& solver, int count, LandmarkMethod method,
+                                  std::vector<double>* rows) {
+  return sample_landmarks(solver, count, method, rows, nullptr);
 }
 
 Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& options) {
@@ -156,19 +179,39 @@ Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& 
   const std::vector<int> ref = referenced_vertices(solver);
 
   auto t0 = Clock::now();
+  const int q = std::min(options.landmarks, static_cast<int>(ref.size()));
+  const std::size_t stride = static_cast<std::size_t>(nv);
   std::vector<double> rows;
-  e.landmarks = choose_landmarks(solver, options.landmarks, options.landmark_method, &rows);
-  e.seconds_landmarks = seconds_since(t0);
-  const int q = static_cast<int>(e.landmarks.size());
-
-  t0 = Clock::now();
-  if (rows.empty()) rows = solver.distance_rows(e.landmarks);
+  if (options.landmark_method == LandmarkMethod::GeodesicFps) {
+    e.landmarks = sample_landmarks(solver, q, options.landmark_method, &rows, nullptr);
+    e.seconds_landmarks = seconds_since(t0);
+    t0 = Clock::now();
+    if (rows.empty()) rows = solver.distance_rows(e.landmarks);  // all vertices are landmarks
+  } else {
+    // Each row is marched by a task spawned as soon as its landmark is chosen, so a second
+    // thread computes rows while this one is still sampling. With one thread the tasks run in
+    // wait(). Each row depends only on its landmark: the result is the same either way.
+    rows.resize(static_cast<std::size_t>(q) * stride);
+    tbb::task_group tasks;
+    const auto spawn = [&](int k, int v) {
+      tasks.run([&solver, &rows, stride, k, v] { solver.distances(&v, 1, rows.data() + k * stride); });
+    };
+    try {
+      e.landmarks = sample_landmarks(solver, q, options.landmark_method, nullptr, spawn);
+    } catch (...) {
+      tasks.cancel();
+      tasks.wait();
+      throw;
+    }
+    e.seconds_landmarks = seconds_since(t0);
+    t0 = Clock::now();
+    tasks.wait();
+  }
   check_reached(ref, rows.data(), e.landmarks[0]);
   e.landmark_distances = std::move(rows);
   e.seconds_rows = seconds_since(t0);
 
   t0 = Clock::now();
-  const std::size_t stride = static_cast<std::size_t>(nv);
   // The front from landmark i reaching j and the one from j reaching i differ by the marching
   // error; both entries get their mean, so that D is symmetric and the rows agree with it
   // (place_points on a landmark's own row then gives back its coordinates exactly).
@@ -219,25 +262,29 @@ Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& 
   for (int j = 0; j < dims; ++j) scale[j] = 0.5 / std::sqrt(e.eigenvalues[j]);
   const int num_chunks = (nv + kVertexChunk - 1) / kVertexChunk;
   tbb::parallel_for(tbb::blocked_range<int>(0, num_chunks), [&](const tbb::blocked_range<int>& r) {
-    std::vector<double> acc;
+    // Accumulators are dimension-major so that the inner loops run over contiguous vertices
+    // (vectorized): per landmark k, acc_j += v_j[k] · (Δ̄_k − d_k²) for the whole chunk.
+    std::vector<double> acc, t;
     for (int chunk = r.begin(); chunk != r.end(); ++chunk) {
       const int first = chunk * kVertexChunk, last = std::min(nv, first + kVertexChunk);
-      acc.assign(static_cast<std::size_t>(last - first) * dims, 0.0);
+      const int m = last - first;
+      acc.assign(static_cast<std::size_t>(m) * dims, 0.0);
+      t.resize(m);
       for (int k = 0; k < q; ++k) {
-        const double* row = dist + k * stride;
+        const double* row = dist + k * stride + first;
         const double mean = e.mean_squared_distances[k];
-        for (int i = first; i < last; ++i) {
-          if (!std::isfinite(row[i])) continue;
-          const double t = mean - row[i] * row[i];
-          double* a = &acc[static_cast<std::size_t>(i - first) * dims];
-          for (int j = 0; j < dims; ++j) a[j] += e.eigenvectors[j * q + k] * t;
+        for (int i = 0; i < m; ++i) t[i] = std::isfinite(row[i]) ? mean - row[i] * row[i] : 0.0;
+        for (int j = 0; j < dims; ++j) {
+          const double v = e.eigenvectors[j * q + k];
+          double* a = acc.data() + static_cast<std::size_t>(j) * m;
+          for (int i = 0; i < m; ++i) a[i] += v * t[i];
         }
       }
-      for (int i = first; i < last; ++i) {
-        if (!solver.is_referenced(i)) continue;
+      for (int i = 0; i < m; ++i) {
+        if (!solver.is_referenced(first + i)) continue;
         for (int j = 0; j < dims; ++j)
-          e.coordinates[i * static_cast<std::size_t>(dims) + j] =
-              scale[j] * acc[static_cast<std::size_t>(i - first) * dims + j];
+          e.coordinates[(first + i) * static_cast<std::size_t>(dims) + j] =
+              scale[j] * acc[static_cast<std::size_t>(j) * m + i];
       }
     }
   });
@@ -273,21 +320,32 @@ std::vector<double> gdd(const Embedding& e, int dims) {
   if (q < 2) return out;
   const int num_chunks = (nv + kVertexChunk - 1) / kVertexChunk;
   tbb::parallel_for(tbb::blocked_range<int>(0, num_chunks), [&](const tbb::blocked_range<int>& r) {
+    // The chunk's coordinates dimension-major, so the inner loops run over contiguous vertices.
+    std::vector<double> y, s2;
     for (int chunk = r.begin(); chunk != r.end(); ++chunk) {
       const int first = chunk * kVertexChunk, last = std::min(nv, first + kVertexChunk);
+      const int m = last - first;
+      y.resize(static_cast<std::size_t>(m) * dims);
+      s2.resize(m);
+      for (int i = 0; i < m; ++i)
+        for (int j = 0; j < dims; ++j)
+          y[static_cast<std::size_t>(j) * m + i] = e.coordinates[(first + i) * static_cast<std::size_t>(dim_stride) + j];
+      double* o = out.data() + first;
       for (int k = 0; k < q; ++k) {
-        const double* row = e.landmark_distances.data() + k * stride;
+        const double* row = e.landmark_distances.data() + k * stride + first;
         const double* yl = e.coordinates.data() + e.landmarks[k] * static_cast<std::size_t>(dim_stride);
-        for (int i = first; i < last; ++i) {
-          if (!std::isfinite(row[i])) continue;
-          const double* yi = e.coordinates.data() + i * static_cast<std::size_t>(dim_stride);
-          double s = 0;
-          for (int j = 0; j < dims; ++j) s += (yi[j] - yl[j]) * (yi[j] - yl[j]);
-          const double diff = std::sqrt(s) - row[i];
-          out[i] += diff * diff;
+        std::fill(s2.begin(), s2.end(), 0.0);
+        for (int j = 0; j < dims; ++j) {
+          const double* yj = y.data() + static_cast<std::size_t>(j) * m;
+          const double c = yl[j];
+          for (int i = 0; i < m; ++i) s2[i] += (yj[i] - c) * (yj[i] - c);
+        }
+        for (int i = 0; i < m; ++i) {
+          const double diff = std::sqrt(s2[i]) - row[i];
+          if (std::isfinite(diff)) o[i] += diff * diff;
         }
       }
-      for (int i = first; i < last; ++i) out[i] = std::sqrt(out[i] / (q - 1));
+      for (int i = 0; i < m; ++i) o[i] = std::sqrt(o[i] / (q - 1));
     }
   });
   return out;

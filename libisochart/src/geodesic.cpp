@@ -49,7 +49,10 @@ struct Scratch {
   };
   std::vector<std::uint8_t> state;  // kFar, kFront or kFrozen per vertex
   std::vector<int> label;  // source index per reached vertex, for runs from several sources
-  std::vector<Entry> buckets[65];
+  // Bucket i ≥ 1 holds keys whose highest bit differing from `last` is bit i − 1; bucket 0
+  // holds keys equal to it. Keys are non-negative doubles, so bit 63 never differs: 64 buckets.
+  std::vector<Entry> buckets[64];
+  std::uint64_t occupied = 0;  // bit i set when bucket i is not empty
   std::uint64_t last = 0;
   std::size_t size = 0;
 
@@ -58,33 +61,40 @@ struct Scratch {
     std::memcpy(&b, &key, sizeof b);
     return b;
   }
-  int bucket_of(std::uint64_t key) const { return key == last ? 0 : 64 - __builtin_clzll(key ^ last); }
+  // Written without branches: which bucket a key falls in is what the hardware cannot predict.
+  int bucket_of(std::uint64_t key) const { return 63 - __builtin_clzll(((key ^ last) << 1) | 1); }
+  void put(const Entry& e) {
+    const int b = bucket_of(e.key);
+    buckets[b].push_back(e);
+    occupied |= std::uint64_t{1} << b;
+  }
 
   void reset(int n) {
     state.assign(static_cast<std::size_t>(n), kFar);
     for (auto& b : buckets) b.clear();
+    occupied = 0;
     last = 0;
     size = 0;
   }
   bool empty() const { return size == 0; }
   void push(int v, double distance) {
-    const std::uint64_t key = std::max(bits(distance), last);
-    buckets[bucket_of(key)].push_back({key, v});
+    put({std::max(bits(distance), last), v});
     ++size;
   }
   int pop() {
     if (buckets[0].empty()) {
-      int i = 1;
-      while (buckets[i].empty()) ++i;
+      const int i = __builtin_ctzll(occupied & ~std::uint64_t{1});
+      occupied &= ~(std::uint64_t{1} << i);
       std::vector<Entry>& b = buckets[i];
       std::uint64_t least = b.front().key;
-      for (const Entry& e : b) least = std::min(least, e.key);
+      for (const Entry& e : b) least -= (least - e.key) & (std::uint64_t{0} - (e.key < least));
       last = least;
-      for (const Entry& e : b) buckets[bucket_of(e.key)].push_back(e);
+      for (const Entry& e : b) put(e);  // each lands in a lower bucket
       b.clear();
     }
     const int v = buckets[0].back().v;
     buckets[0].pop_back();
+    if (buckets[0].empty()) occupied &= ~std::uint64_t{1};
     --size;
     return v;
   }

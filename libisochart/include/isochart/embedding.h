@@ -51,8 +51,9 @@ struct Embedding {
   /// placed from its squared distances to the landmarks by place_points (§5.2.1). Unreferenced
   /// vertices are at the origin.
   std::vector<double> coordinates;
-  /// Seconds spent choosing landmarks, computing the distance rows, and in the eigen solver
-  /// plus placement (wall clock, for reports and benchmarks).
+  /// Wall-clock seconds, for reports and benchmarks: choosing the landmarks (rows computed by
+  /// other threads meanwhile are not counted separately), finishing the distance rows after
+  /// that, and the eigen solver plus placement.
   double seconds_landmarks = 0, seconds_rows = 0, seconds_spectral = 0;
 
   double coordinate(int vertex, int dim) const {
