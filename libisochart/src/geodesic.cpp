@@ -22,6 +22,12 @@ using Wedge = detail::GeodesicWedge;
 // within two or three.
 constexpr int kMaxUnfoldings = 12;
 
+// Corners more obtuse than this (cosine; about 95.7°) are split by unfolding. Nearly right
+// corners, common in scanned meshes, gained nothing measurable against CGAL's exact distances
+// (torus 0.35% vs 0.38% mean error, bumpy patch 0.066% vs 0.069%) but cost a fifth of the run
+// time on the bunny (9514 corners split instead of 2027).
+constexpr double kSplitCosine = -0.1;
+
 // A triangle whose unfolded height is below this fraction of its base gives no direction
 // information and only amplifies rounding, so it takes part in edge updates only.
 constexpr double kMinRelativeHeight = 1e-9;
@@ -250,7 +256,9 @@ GeodesicSolver::GeodesicSolver(const std::vector<Vec3d>& positions, const std::v
     for (int k = 0; k < 3; ++k) {
       const int c = t[k], a = t[(k + 1) % 3], b = t[(k + 2) % 3];
       const P2 pc = p[k], pa = sub(p[(k + 1) % 3], pc), pb = sub(p[(k + 2) % 3], pc);
-      if (!(dot2(pa, pa) > 0 && dot2(pb, pb) > 0) || dot2(pa, pb) >= 0) continue;
+      if (!(dot2(pa, pa) > 0 && dot2(pb, pb) > 0) ||
+          dot2(pa, pb) >= kSplitCosine * std::sqrt(dot2(pa, pa) * dot2(pb, pb)))
+        continue;
       // Obtuse at C: walk the strip of triangles that the acute section of the angle (the
       // directions within 90° of both CA and CB) crosses, until a vertex falls inside it.
       // Coordinates are relative to C from here on.

@@ -32,8 +32,8 @@ struct GeodesicWedge {
 /// triangle by unfolding it into the plane and placing the virtual point source that has the
 /// distances d(A), d(B) (exact for a point source on a plane); the update is taken only when the
 /// source's ray to C crosses the edge AB, otherwise edge updates d(A) + |AC| apply. A triangle
-/// obtuse at C is split, once at construction, by unfolding the triangles across its opposite
-/// edge until a vertex V lies in the acute section of the angle, and the two virtual triangles
+/// obtuse at C (beyond about 96°: nearly right corners gained nothing measurable) is split, once
+/// at construction, by unfolding the triangles across its opposite edge until a vertex V lies in the acute section of the angle, and the two virtual triangles
 /// (C, A, V) and (C, V, B) provide updates of C (Kimmel & Sethian §4) in addition to the obtuse
 /// triangle itself (whose update is still exact on a plane whenever its ray is inside; keeping
 /// it halved the error on a curved torus compared with replacing it). When no such vertex is
