@@ -9,12 +9,11 @@
 // eight.off, small enough (< 10k vertices) to compare with CGAL's exact geodesics, from the
 // shared data folder. Times are wall clock, the median of N repetitions.
 
+#include <Spectra/MatOp/DenseSymMatProd.h>
+#include <Spectra/SymEigsSolver.h>
 #include <tbb/global_control.h>
 
 #include <Eigen/Dense>
-#include <Spectra/MatOp/DenseSymMatProd.h>
-#include <Spectra/SymEigsSolver.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -70,9 +69,12 @@ double median(std::vector<double> v) {
 
 const char* method_name(LandmarkMethod m) {
   switch (m) {
-    case LandmarkMethod::FastGeodesicFps: return "fast geodesic FPS";
-    case LandmarkMethod::GeodesicFps: return "geodesic FPS";
-    case LandmarkMethod::EuclideanFps: return "Euclidean FPS";
+    case LandmarkMethod::FastGeodesicFps:
+      return "fast geodesic FPS";
+    case LandmarkMethod::GeodesicFps:
+      return "geodesic FPS";
+    case LandmarkMethod::EuclideanFps:
+      return "Euclidean FPS";
   }
   return "?";
 }
@@ -159,7 +161,8 @@ void bench_eigen_solvers(const Embedding& e, int reps) {
       }));
       lanczos.push_back(seconds([&] {
         Spectra::DenseSymMatProd<double> op(b);
-        Spectra::SymEigsSolver<Spectra::DenseSymMatProd<double>> eigs(op, nev, std::min(q, std::max(2 * nev + 1, 20)));
+        Spectra::SymEigsSolver<Spectra::DenseSymMatProd<double>> eigs(op, nev,
+                                                                      std::min(q, std::max(2 * nev + 1, 20)));
         eigs.init();
         eigs.compute(Spectra::SortRule::LargestAlge, 1000, 1e-12);
         lanczos_values = eigs.eigenvalues();
@@ -168,8 +171,10 @@ void bench_eigen_solvers(const Embedding& e, int reps) {
     const double diff = lanczos_values.size() == nev
                             ? (dense_values - lanczos_values).cwiseAbs().maxCoeff() / dense_values[0]
                             : -1.0;
-    std::printf("  eigen solver, q = %d, top %d: Eigen dense %.3f ms, Spectra Lanczos %.3f ms (max relative eigenvalue difference %.1e)\n",
-                q, nev, 1e3 * median(dense), 1e3 * median(lanczos), diff);
+    std::printf(
+        "  eigen solver, q = %d, top %d: Eigen dense %.3f ms, Spectra Lanczos %.3f ms (max relative "
+        "eigenvalue difference %.1e)\n",
+        q, nev, 1e3 * median(dense), 1e3 * median(lanczos), diff);
   }
 }
 
@@ -197,8 +202,10 @@ void bench_accuracy(const Mesh& mesh, const GeodesicSolver& solver, const std::v
     sum += rel / n;
     ++runs;
   }
-  std::printf("  accuracy vs CGAL exact geodesics (3 sources): mean relative error %.4f%%, max error %.2f mean edges (CGAL %.1f s per source)\n",
-              100 * sum / runs, worst, exact_seconds / runs);
+  std::printf(
+      "  accuracy vs CGAL exact geodesics (3 sources): mean relative error %.4f%%, max error %.2f mean edges "
+      "(CGAL %.1f s per source)\n",
+      100 * sum / runs, worst, exact_seconds / runs);
 }
 
 void bench_mesh(const std::string& path, int reps) {
@@ -228,8 +235,10 @@ void bench_mesh(const std::string& path, int reps) {
       wall.push_back(seconds([&] { solver.distances({src}, d); }));
       cpu.push_back(cpu_seconds(CLOCK_THREAD_CPUTIME_ID) - c0);
     }
-    std::printf("  fast marching, one source, 1 thread: %.2f ms CPU, %.2f ms wall (medians of %zu runs; min %.2f ms CPU)\n",
-                1e3 * median(cpu), 1e3 * median(wall), wall.size(), 1e3 * *std::min_element(cpu.begin(), cpu.end()));
+    std::printf(
+        "  fast marching, one source, 1 thread: %.2f ms CPU, %.2f ms wall (medians of %zu runs; min %.2f ms "
+        "CPU)\n",
+        1e3 * median(cpu), 1e3 * median(wall), wall.size(), 1e3 * *std::min_element(cpu.begin(), cpu.end()));
   }
 
   if (ref.size() <= 10000) bench_accuracy(mesh, solver, ref);
@@ -253,10 +262,12 @@ void bench_mesh(const std::string& path, int reps) {
         rows.push_back(e.seconds_rows);
         spec.push_back(e.seconds_spectral);
       }
-      std::printf("  %-18s %d thread%s: wall %.3f s (min %.3f; landmarks %.3f, rows %.3f, spectral + placement %.3f), CPU %.3f s, CPU/threads %.3f s\n",
-                  method_name(method), threads, threads > 1 ? "s" : " ", median(wall),
-                  *std::min_element(wall.begin(), wall.end()), median(lm), median(rows), median(spec), median(cpu),
-                  median(cpu) / threads);
+      std::printf(
+          "  %-18s %d thread%s: wall %.3f s (min %.3f; landmarks %.3f, rows %.3f, spectral + placement "
+          "%.3f), CPU %.3f s, CPU/threads %.3f s\n",
+          method_name(method), threads, threads > 1 ? "s" : " ", median(wall),
+          *std::min_element(wall.begin(), wall.end()), median(lm), median(rows), median(spec), median(cpu),
+          median(cpu) / threads);
     }
     std::vector<double> g;
     const Timing tg = timed([&] { g = gdd(e, e.dimensions); });
@@ -264,15 +275,18 @@ void bench_mesh(const std::string& path, int reps) {
     double covering = 0;
     for (int v : ref) {
       double nearest = GeodesicSolver::inf;
-      for (std::size_t k = 0; k < e.landmarks.size(); ++k) nearest = std::min(nearest, e.landmark_distance(static_cast<int>(k), v));
+      for (std::size_t k = 0; k < e.landmarks.size(); ++k)
+        nearest = std::min(nearest, e.landmark_distance(static_cast<int>(k), v));
       covering = std::max(covering, nearest);
     }
     double energy3 = 0;
     for (int j = 0; j < std::min(3, e.dimensions); ++j) energy3 += e.eigenvalues[j];
-    std::printf("  %-18s quality: covering radius/mean dist %.4f, dims %d, top-3 energy %.3f, probe distortion %.4f (all dims) %.4f (2-D), mean GDD/mean dist %.4f",
-                method_name(method), covering / probes.mean_distance, e.dimensions, energy3 / e.eigenvalue_sum,
-                probe_distortion(e, e.dimensions, probes, ref), probe_distortion(e, 2, probes, ref),
-                mean_of(g, ref) / probes.mean_distance);
+    std::printf(
+        "  %-18s quality: covering radius/mean dist %.4f, dims %d, top-3 energy %.3f, probe distortion %.4f "
+        "(all dims) %.4f (2-D), mean GDD/mean dist %.4f",
+        method_name(method), covering / probes.mean_distance, e.dimensions, energy3 / e.eigenvalue_sum,
+        probe_distortion(e, e.dimensions, probes, ref), probe_distortion(e, 2, probes, ref),
+        mean_of(g, ref) / probes.mean_distance);
     if (disk) {
       std::vector<Vec2d> uv(mesh.positions.size());
       for (int v : ref) uv[v] = {e.coordinate(v, 0), e.coordinate(v, 1)};
@@ -320,8 +334,8 @@ int main(int argc, char** argv) {
   }
   if (meshes.empty()) {
     const std::string dir = std::string(ISOCHARTS_SHARED_DATA) + "/meshes/";
-    meshes = {dir + "bunny.obj", dir + "feline.off", dir + "hand.obj", dir + "face_mask.off", dir + "bunny_lowres.off",
-              dir + "eight.off"};
+    meshes = {dir + "bunny.obj",     dir + "feline.off",       dir + "hand.obj",
+              dir + "face_mask.off", dir + "bunny_lowres.off", dir + "eight.off"};
   }
   try {
     for (const auto& m : meshes) bench_mesh(m, reps);

@@ -1,13 +1,12 @@
 #include "isochart/embedding.h"
 
+#include <Spectra/MatOp/DenseSymMatProd.h>
+#include <Spectra/SymEigsSolver.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
 #include <Eigen/Dense>
-#include <Spectra/MatOp/DenseSymMatProd.h>
-#include <Spectra/SymEigsSolver.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -98,7 +97,8 @@ namespace {
 std::vector<int> sample_landmarks(const GeodesicSolver& solver, int count, LandmarkMethod method,
                                   std::vector<double>* rows, const std::function<void(int, int)>& chosen) {
   if (rows) rows->clear();
-  if (count < 1) throw InputError("", "embedding: landmark count must be at least 1, got " + std::to_string(count));
+  if (count < 1)
+    throw InputError("", "embedding: landmark count must be at least 1, got " + std::to_string(count));
   const std::vector<int> ref = referenced_vertices(solver);
   if (count >= static_cast<int>(ref.size())) {
     if (chosen)
@@ -174,8 +174,8 @@ Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& 
   if (options.landmarks < 2)
     throw InputError("", "embedding: landmarks must be at least 2, got " + std::to_string(options.landmarks));
   if (options.max_dimensions < 1)
-    throw InputError("", "embedding: max_dimensions must be at least 1, got " +
-                             std::to_string(options.max_dimensions));
+    throw InputError(
+        "", "embedding: max_dimensions must be at least 1, got " + std::to_string(options.max_dimensions));
   Embedding e;
   const int nv = solver.num_vertices();
   e.num_vertices = nv;
@@ -206,7 +206,8 @@ Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& 
     std::vector<std::pair<int, int>> pending;
     const auto spawn_ready = [&] {
       for (const auto& [k, v] : pending)
-        tasks.run([&solver, &rows, stride, k = k, v = v] { solver.distances(&v, 1, rows.data() + k * stride); });
+        tasks.run(
+            [&solver, &rows, stride, k = k, v = v] { solver.distances(&v, 1, rows.data() + k * stride); });
       pending.clear();
     };
     const auto chosen = [&](int k, int v) {
@@ -350,7 +351,8 @@ std::vector<double> gdd(const Embedding& e, int dims) {
       s2.resize(m);
       for (int i = 0; i < m; ++i)
         for (int j = 0; j < dims; ++j)
-          y[static_cast<std::size_t>(j) * m + i] = e.coordinates[(first + i) * static_cast<std::size_t>(dim_stride) + j];
+          y[static_cast<std::size_t>(j) * m + i] =
+              e.coordinates[(first + i) * static_cast<std::size_t>(dim_stride) + j];
       double* o = out.data() + first;
       for (int k = 0; k < q; ++k) {
         const double* row = e.landmark_distances.data() + k * stride + first;

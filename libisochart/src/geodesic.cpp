@@ -46,15 +46,16 @@ constexpr std::uint8_t kFar = 0, kFront = 1, kFrozen = 2;
 // one bucket. Popped keys never decrease, which a Dijkstra-ordered front guarantees except for
 // the rare triangle update landing below its own inputs; those are queued at the current key
 // (their distance is kept). There is no decrease-key: a lowered vertex is pushed again and its
-// later entries are dropped because it is frozen by then. Measured about twice as fast as a
-// 4-ary heap here, where sift-downs dominated a run.
+// later entries are dropped because it is frozen by then. On the bunny it was about 10% faster
+// than an indexed 4-ary heap (whose sift-downs dominated the profile), and 15% more once the
+// first non-empty bucket came from a bit mask instead of a scan.
 struct Scratch {
   struct Entry {
     std::uint64_t key;
     int v;
   };
   std::vector<std::uint8_t> state;  // kFar, kFront or kFrozen per vertex
-  std::vector<int> label;  // source index per reached vertex, for runs from several sources
+  std::vector<int> label;           // source index per reached vertex, for runs from several sources
   // Bucket i ≥ 1 holds keys whose highest bit differing from `last` is bit i − 1; bucket 0
   // holds keys equal to it. Keys are non-negative doubles, so bit 63 never differs: 64 buckets.
   std::vector<Entry> buckets[64];
@@ -114,9 +115,15 @@ Scratch& thread_scratch() {
 struct P2 {
   double x, y;
 };
-inline P2 sub(P2 a, P2 b) { return {a.x - b.x, a.y - b.y}; }
-inline double dot2(P2 a, P2 b) { return a.x * b.x + a.y * b.y; }
-inline double cross2(P2 a, P2 b) { return a.x * b.y - a.y * b.x; }
+inline P2 sub(P2 a, P2 b) {
+  return {a.x - b.x, a.y - b.y};
+}
+inline double dot2(P2 a, P2 b) {
+  return a.x * b.x + a.y * b.y;
+}
+inline double cross2(P2 a, P2 b) {
+  return a.x * b.y - a.y * b.x;
+}
 
 // The point at distances l1 from p1 and l2 from p2, on the other side of line p1p2 than `away`.
 // Returns false when the edge is degenerate or the side cannot be told.
@@ -172,7 +179,9 @@ inline double triangle_update(double dx, double dy, double c, double cx, double 
 }
 
 // Edge update along a wedge length (disabled when negative).
-inline double edge_update(double dx, float len) { return std::signbit(len) ? GeodesicSolver::inf : dx + len; }
+inline double edge_update(double dx, float len) {
+  return std::signbit(len) ? GeodesicSolver::inf : dx + len;
+}
 
 }  // namespace
 
@@ -187,8 +196,8 @@ GeodesicSolver::GeodesicSolver(const std::vector<Vec3d>& positions, const std::v
     for (int k = 0; k < 3; ++k)
       if (faces[f][k] < 0 || faces[f][k] >= nv)
         throw InputError("", "geodesics: face " + std::to_string(f) + " references vertex " +
-                                 std::to_string(faces[f][k]) + ", but there are " +
-                                 std::to_string(nv) + " vertices");
+                                 std::to_string(faces[f][k]) + ", but there are " + std::to_string(nv) +
+                                 " vertices");
 
   auto valid_face = [&](int f) {
     const Face& t = faces[f];
@@ -402,8 +411,7 @@ void GeodesicSolver::distances(const std::vector<int>& sources, std::vector<doub
   distances(sources.data(), static_cast<int>(sources.size()), out.data(), max_distance);
 }
 
-void GeodesicSolver::distances(const int* sources, int num_sources, double* out,
-                               double max_distance) const {
+void GeodesicSolver::distances(const int* sources, int num_sources, double* out, double max_distance) const {
   std::fill(out, out + num_vertices(), inf);
   if (num_sources > 1)
     march<true>(sources, num_sources, out, max_distance, nullptr);

@@ -45,8 +45,8 @@ std::vector<double> exact_geodesic_distances(const std::vector<Vec3d>& positions
   for (std::size_t f = 0; f < faces.size(); ++f) {
     const auto fh = mesh.add_face(handle[faces[f][0]], handle[faces[f][1]], handle[faces[f][2]]);
     if (fh == SurfaceMesh::null_face())
-      throw InputError("", "exact geodesics: face " + std::to_string(f) +
-                               " breaks the oriented 2-manifold CGAL needs");
+      throw InputError(
+          "", "exact geodesics: face " + std::to_string(f) + " breaks the oriented 2-manifold CGAL needs");
   }
 
   ShortestPath paths(mesh);

@@ -2,9 +2,9 @@
 
 #include <tbb/global_control.h>
 
-#include <catch2/catch.hpp>
 #include <Eigen/Dense>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <set>
 
@@ -142,7 +142,8 @@ TEST_CASE("place_points reproduces landmark coordinates", "[embedding]") {
     place_points(e, dims, sq.data(), out.data());
     for (int j = 0; j < dims; ++j) CHECK(std::abs(out[j] - e.coordinate(e.landmarks[k], j)) < 1e-9 * scale);
     // Its column (the other landmarks' fronts reaching it) is the same after symmetrization.
-    for (int j = 0; j < q; ++j) CHECK(e.landmark_distance(k, e.landmarks[j]) == e.landmark_distance(j, e.landmarks[k]));
+    for (int j = 0; j < q; ++j)
+      CHECK(e.landmark_distance(k, e.landmarks[j]) == e.landmark_distance(j, e.landmarks[k]));
   }
   // Every other vertex is placed by the same formula from its distance column.
   for (int v = 0; v < m.num_vertices(); v += 37) {

@@ -19,8 +19,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 // A reproducible value in [-0.5, 0.5) from two integers (a hash, not a random generator).
 inline double hash_unit(int i, int j) {
-  std::uint64_t z = (static_cast<std::uint64_t>(static_cast<std::uint32_t>(i)) << 32) ^
-                    static_cast<std::uint32_t>(j);
+  std::uint64_t z =
+      (static_cast<std::uint64_t>(static_cast<std::uint32_t>(i)) << 32) ^ static_cast<std::uint32_t>(j);
   z += 0x9E3779B97F4A7C15ull;
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
@@ -65,11 +65,11 @@ inline Mesh grid(int nx, int ny, double w, double h, double shear = 0, double ji
 inline Mesh icosphere(int levels) {
   Mesh m;
   const double t = (1 + std::sqrt(5.0)) / 2;
-  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  m.faces = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+  m.positions = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  m.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
              {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-             {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (auto& p : m.positions) p = isochart::normalized(p);
   for (int l = 0; l < levels; ++l) {
     std::map<std::pair<int, int>, int> mid;
@@ -101,8 +101,8 @@ inline Mesh torus(int nu, int nv, double R, double r) {
   for (int j = 0; j < nv; ++j)
     for (int i = 0; i < nu; ++i) {
       const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
-      m.positions.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u),
-                             r * std::sin(v)});
+      m.positions.push_back(
+          {(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
     }
   auto id = [&](int i, int j) { return (j % nv) * nu + (i % nu); };
   for (int j = 0; j < nv; ++j)

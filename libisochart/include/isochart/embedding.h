@@ -23,16 +23,18 @@ enum class LandmarkMethod {
   EuclideanFps,
 };
 
+/// Options of landmark_isomap.
 struct EmbeddingOptions {
-  int landmarks = 100;      ///< q; all referenced vertices when the mesh has fewer (Iso-charts §6). ≥ 2.
+  /// q; all referenced vertices when the mesh has fewer (Iso-charts §6). At least 2.
+  int landmarks = 100;
   int max_dimensions = 10;  ///< top eigenpairs computed (§6). ≥ 1.
-  LandmarkMethod landmark_method = LandmarkMethod::FastGeodesicFps;
+  LandmarkMethod landmark_method = LandmarkMethod::FastGeodesicFps;  ///< how landmarks are chosen
 };
 
 /// A landmark IsoMap embedding of one connected mesh or chart. Matrices are row-major.
 struct Embedding {
-  int num_vertices = 0;                   ///< #V of the solver's mesh
-  std::vector<int> landmarks;             ///< q vertex ids, in the order chosen (see choose_landmarks)
+  int num_vertices = 0;        ///< #V of the solver's mesh
+  std::vector<int> landmarks;  ///< q vertex ids, in the order chosen (see choose_landmarks)
   /// q × #V geodesic distances, row per landmark (+inf at unreferenced vertices). The q × q
   /// landmark-to-landmark entries hold the mean of both directions (fast marching is not
   /// exactly symmetric), so they form the symmetric D of §4.1.
@@ -40,8 +42,10 @@ struct Embedding {
   /// Descending: the positive ones among the top max_dimensions eigenvalues of B, where
   /// "positive" means above 1e-6·λ1, so that rounding noise on a flat chart adds no dimension.
   std::vector<double> eigenvalues;
-  double eigenvalue_sum = 0;              ///< Σ of all q eigenvalues of B (its trace), for the energy tests of §5.1/§5.3
-  int dimensions = 0;                     ///< = eigenvalues.size()
+  /// Σ of all q eigenvalues of B (its trace, negative ones included), for the energy tests of
+  /// §5.1/§5.3.
+  double eigenvalue_sum = 0;
+  int dimensions = 0;  ///< = eigenvalues.size()
   /// dimensions × q unit eigenvectors v_j of B, row per dimension, each with its
   /// largest-magnitude component positive (so results are reproducible).
   std::vector<double> eigenvectors;
@@ -56,9 +60,11 @@ struct Embedding {
   /// that, and the eigen solver plus placement.
   double seconds_landmarks = 0, seconds_rows = 0, seconds_spectral = 0;
 
+  /// Coordinate `dim` of `vertex`.
   double coordinate(int vertex, int dim) const {
     return coordinates[static_cast<std::size_t>(vertex) * dimensions + dim];
   }
+  /// Geodesic distance from landmark number `landmark_index` (not a vertex id) to `vertex`.
   double landmark_distance(int landmark_index, int vertex) const {
     return landmark_distances[static_cast<std::size_t>(landmark_index) * num_vertices + vertex];
   }
@@ -67,16 +73,21 @@ struct Embedding {
 /// Landmark IsoMap embedding (Iso-charts §4.1, §6) of the mesh behind `solver`: choose q
 /// landmarks, compute their distance rows by fast marching (in parallel with oneTBB; identical
 /// for any thread count), double-centre the squared landmark distances into B = −½ J D J,
-/// take its top eigenpairs, place every vertex. Unreferenced vertices are ignored (never landmarks, at the origin).
-/// \throw InputError when options are out of range or no face uses any vertex;
+/// take its top eigenpairs, place every vertex. Unreferenced vertices are ignored (never
+/// landmarks, at the origin).
+///
+/// \throw InputError when options are out of range or no face uses any vertex.
 /// \throw Error when the referenced vertices are not one connected surface (embed each
 ///        component separately).
 Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& options = {});
 
 /// Chooses `count` landmarks (all referenced vertices, in id order, when there are no more
 /// than `count`). Farthest-point sampling starts at the referenced vertex farthest from the
-/// centroid of the referenced vertices (lowest id on ties). With GeodesicFps, `rows` (if not
-/// null) receives the count × #V distance rows computed on the way; otherwise it is cleared.
+/// centroid of the referenced vertices (lowest id on ties); each next landmark is the vertex
+/// farthest from those chosen (lowest id on ties). With GeodesicFps, `rows` (if not null)
+/// receives the count × #V distance rows computed on the way; otherwise, or when all vertices
+/// are landmarks, it is cleared.
+/// \throw InputError when count < 1 or no face uses any vertex.
 /// \throw Error as landmark_isomap when the surface is not connected (geodesic methods).
 std::vector<int> choose_landmarks(const GeodesicSolver& solver, int count, LandmarkMethod method,
                                   std::vector<double>* rows = nullptr);

@@ -30,15 +30,16 @@ struct GeodesicWedge {
 ///
 /// The front is Dijkstra-ordered; a vertex C is updated from two accepted neighbours A, B of a
 /// triangle by unfolding it into the plane and placing the virtual point source that has the
-/// distances d(A), d(B) (exact for a point source on a plane); the update is taken only when the
-/// source's ray to C crosses the edge AB, otherwise edge updates d(A) + |AC| apply. A triangle
-/// obtuse at C (beyond about 96°: nearly right corners gained nothing measurable) is split, once
-/// at construction, by unfolding the triangles across its opposite edge until a vertex V lies in the acute section of the angle, and the two virtual triangles
-/// (C, A, V) and (C, V, B) provide updates of C (Kimmel & Sethian §4) in addition to the obtuse
-/// triangle itself (whose update is still exact on a plane whenever its ray is inside; keeping
-/// it halved the error on a curved torus compared with replacing it). When no such vertex is
-/// found within a few unfoldings (mesh boundary, non-manifold edge) only the obtuse triangle
-/// is used.
+/// distances d(A), d(B) (exact for a point source on a plane); the update is taken only when
+/// the source's ray to C crosses the edge AB, otherwise edge updates d(A) + |AC| apply.
+///
+/// Obtuse triangles (Kimmel & Sethian 1998): a triangle obtuse at C (beyond about 96°; nearly
+/// right corners gained nothing measurable) is split once, at construction, by unfolding the
+/// triangles across its opposite edge until a vertex V lies in the acute section of the angle;
+/// the two virtual triangles (C, A, V) and (C, V, B) then also update C. The obtuse triangle's
+/// own update stays: it is still exact on a plane whenever its ray is inside, and keeping it
+/// halved the error on a curved torus compared with replacing it. When no such vertex is found
+/// within a few unfoldings (mesh boundary, non-manifold edge) only the obtuse triangle is used.
 ///
 /// Works on open meshes, several components (unreachable vertices get +inf), unreferenced
 /// vertices (always +inf unless a source) and non-manifold edges (never unfolded across).
@@ -52,11 +53,13 @@ class GeodesicSolver {
   GeodesicSolver(const std::vector<Vec3d>& positions, const std::vector<Face>& faces);
   explicit GeodesicSolver(const Mesh& mesh) : GeodesicSolver(mesh.positions, mesh.faces) {}
 
+  /// #V, as given (unreferenced vertices included).
   int num_vertices() const { return static_cast<int>(positions_.size()); }
+  /// A copy of the positions given (for landmark seeding and Euclidean sampling).
   const std::vector<Vec3d>& positions() const { return positions_; }
-  /// True when some face uses vertex v.
+  /// True when some non-degenerate face uses vertex v.
   bool is_referenced(int v) const { return wedge_offsets_[v + 1] > wedge_offsets_[v]; }
-  /// Obtuse triangle corners given two acute virtual triangles, and those left without.
+  /// Diagnostics: obtuse corners given two acute virtual triangles, and those left without.
   int num_split_obtuse() const { return split_obtuse_; }
   int num_unsplit_obtuse() const { return unsplit_obtuse_; }
 
@@ -67,8 +70,7 @@ class GeodesicSolver {
   /// Thread-safe: concurrent calls on one solver are allowed (each thread has its own scratch,
   /// kept between calls, so repeated calls allocate nothing but the output).
   /// \throw Error when a source is not a vertex id.
-  void distances(const std::vector<int>& sources, std::vector<double>& out,
-                 double max_distance = inf) const;
+  void distances(const std::vector<int>& sources, std::vector<double>& out, double max_distance = inf) const;
   /// Same, writing #V values to `out`.
   void distances(const int* sources, int num_sources, double* out, double max_distance = inf) const;
 
@@ -88,8 +90,7 @@ class GeodesicSolver {
   // plain run, the current field for lower_distances); a vertex enters the front only when its
   // value drops, and never beyond max_distance. `accepted` receives the vertices accepted.
   template <bool kSeveralSources>
-  void march(const int* sources, int num_sources, double* d, double max_distance,
-             int* accepted) const;
+  void march(const int* sources, int num_sources, double* d, double max_distance, int* accepted) const;
 
   std::vector<Vec3d> positions_;
   std::vector<int> wedge_offsets_;  // #V + 1, CSR rows of wedges_ by owner vertex
