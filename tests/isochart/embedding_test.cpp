@@ -261,3 +261,24 @@ TEST_CASE("disconnected meshes, unreferenced vertices and bad options", "[embedd
   CHECK_THROWS_AS(landmark_isomap(solver, bad), InputError);
   CHECK_THROWS_AS(landmark_isomap(GeodesicSolver(std::vector<Vec3d>{{0, 0, 0}}, {})), InputError);
 }
+
+TEST_CASE("tiny charts embed exactly", "[embedding]") {
+  // One triangle, then a quad of two: every vertex is a landmark and the 2-D embedding keeps
+  // all edge lengths.
+  const std::vector<Vec3d> p{{0, 0, 0}, {2, 0, 0.5}, {0.5, 1.5, 0}, {2.2, 1.8, 0.3}};
+  for (const std::vector<Face>& faces :
+       {std::vector<Face>{{0, 1, 2}}, std::vector<Face>{{0, 1, 2}, {1, 3, 2}}}) {
+    const GeodesicSolver solver(p, faces);
+    const Embedding e = landmark_isomap(solver);
+    const int n = faces.size() == 1 ? 3 : 4;
+    REQUIRE(static_cast<int>(e.landmarks.size()) == n);
+    REQUIRE(e.dimensions >= 2);
+    for (const Face& f : faces)
+      for (int k = 0; k < 3; ++k) {
+        const int a = f[k], b = f[(k + 1) % 3];
+        double y = 0;
+        for (int j = 0; j < e.dimensions; ++j) y += std::pow(e.coordinate(a, j) - e.coordinate(b, j), 2);
+        CHECK(std::sqrt(y) == Approx(norm(p[a] - p[b])).epsilon(1e-6));
+      }
+  }
+}
