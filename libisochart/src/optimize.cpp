@@ -74,6 +74,7 @@ class Optimizer {
     area3_ = 0;
     for (const auto& t : flat_) area3_ += t.area;
     tau_ = o.linf_margin * o.max_linf;
+    init_boundary();
     recompute_sums();
   }
 
@@ -221,10 +222,11 @@ class Optimizer {
       if (!(hi > lo) || hi - lo < 1e-300) continue;
       auto eval = [&](double t, double& s1, double& s2, double& pen) {
         if (!ring_terms(v, best_x + d * t, s1, s2, pen)) return kInf;
+        if (!boundary_ok(v, best_x + d * t)) return kInf;
         return objective(s1, s2, pen, r1, r2, rpen);
       };
       // Coarse samples, then golden-section refinement around the best one.
-      constexpr int kSamples = 8;
+      constexpr int kSamples = 5;
       double ts[kSamples + 1], fs[kSamples + 1];
       int bi = -1;
       double s1, s2, pen;
@@ -237,7 +239,7 @@ class Optimizer {
       constexpr double g = 0.6180339887498949;
       double c = b - g * (b - a), e = a + g * (b - a);
       double fc = eval(c, s1, s2, pen), fe = eval(e, s1, s2, pen);
-      for (int it = 0; it < 12; ++it) {
+      for (int it = 0; it < 8; ++it) {
         if (fc < fe) {
           b = e;
           e = c;
@@ -273,11 +275,123 @@ class Optimizer {
       if (first_gain > 0 && gain < o_.min_improvement * first_gain) break;
     }
     if (best_x == x0 || !(best < f0)) return false;
-    uv_[v] = best_x;
+    move_vertex(v, best_x);
     s1_ += bs1 - r1;
     s2_ += bs2 - r2;
     pen_ += bpen - rpen;
     return true;
+  }
+
+  // --- Boundary simplicity. With every triangle counter-clockwise, a simple boundary polygon
+  // makes the map injective, so moves of boundary vertices must keep the boundary simple.
+
+  void init_boundary() {
+    const int nv = static_cast<int>(uv_.size());
+    bprev_.assign(nv, -1);
+    bnext_.assign(nv, -1);
+    double len = 0;
+    int count = 0;
+    Vec2d lo = uv_.empty() ? Vec2d{} : uv_[0], hi = lo;
+    for (const auto& loop : topo_.boundary_loops())
+      for (size_t i = 0; i < loop.size(); ++i) {
+        const int a = loop[i], b = loop[(i + 1) % loop.size()];
+        bnext_[a] = b;
+        bprev_[b] = a;
+        len += norm(uv_[a] - uv_[b]);
+        ++count;
+      }
+    for (const auto& p : uv_) {
+      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y)};
+      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y)};
+    }
+    if (count == 0) return;
+    cell_ = std::max(2 * len / count, 1e-300);
+    const Vec2d pad = (hi - lo) * 0.5;
+    grid_lo_ = lo - pad;
+    grid_n_ = std::clamp(static_cast<int>((hi.x - lo.x + 2 * pad.x) / cell_) + 1, 1, 2048);
+    grid_m_ = std::clamp(static_cast<int>((hi.y - lo.y + 2 * pad.y) / cell_) + 1, 1, 2048);
+    grid_.assign(static_cast<size_t>(grid_n_) * grid_m_, {});
+    for (int v = 0; v < nv; ++v)
+      if (bnext_[v] >= 0) grid_edit(v, uv_[v], uv_[bnext_[v]], true);
+    stamp_.assign(nv, 0);
+  }
+
+  int cell_x(double x) const { return std::clamp(static_cast<int>((x - grid_lo_.x) / cell_), 0, grid_n_ - 1); }
+  int cell_y(double y) const { return std::clamp(static_cast<int>((y - grid_lo_.y) / cell_), 0, grid_m_ - 1); }
+
+  // Adds or removes boundary edge (v → bnext_[v]) with endpoints a, b in every cell its box covers.
+  void grid_edit(int v, const Vec2d& a, const Vec2d& b, bool add) {
+    for (int i = cell_x(std::min(a.x, b.x)); i <= cell_x(std::max(a.x, b.x)); ++i)
+      for (int j = cell_y(std::min(a.y, b.y)); j <= cell_y(std::max(a.y, b.y)); ++j) {
+        auto& c = grid_[static_cast<size_t>(j) * grid_n_ + i];
+        if (add)
+          c.push_back(v);
+        else
+          c.erase(std::find(c.begin(), c.end(), v));
+      }
+  }
+
+  static bool segments_touch(const Vec2d& a, const Vec2d& b, const Vec2d& c, const Vec2d& d) {
+    const double d1 = cross(b - a, c - a), d2 = cross(b - a, d - a);
+    const double d3 = cross(d - c, a - c), d4 = cross(d - c, b - c);
+    if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
+    // Collinear or endpoint contacts count as touching: conservative, only refuses a move.
+    auto on = [](const Vec2d& p, const Vec2d& q, const Vec2d& r, double o) {
+      return o == 0 && std::min(p.x, q.x) <= r.x && r.x <= std::max(p.x, q.x) && std::min(p.y, q.y) <= r.y &&
+             r.y <= std::max(p.y, q.y);
+    };
+    return on(a, b, c, d1) || on(a, b, d, d2) || on(c, d, a, d3) || on(c, d, b, d4);
+  }
+
+  // Does segment (p → q) from boundary vertex `from` to `to` touch a boundary edge not incident
+  // to either?
+  bool crosses_boundary(int from, int to, const Vec2d& p, const Vec2d& q) {
+    ++stamp_id_;
+    for (int i = cell_x(std::min(p.x, q.x)); i <= cell_x(std::max(p.x, q.x)); ++i)
+      for (int j = cell_y(std::min(p.y, q.y)); j <= cell_y(std::max(p.y, q.y)); ++j)
+        for (int e : grid_[static_cast<size_t>(j) * grid_n_ + i]) {
+          if (stamp_[e] == stamp_id_) continue;
+          stamp_[e] = stamp_id_;
+          const int a = e, b = bnext_[e];
+          if (a == from || a == to || b == from || b == to) continue;
+          if (segments_touch(p, q, uv_[a], uv_[b])) return true;
+        }
+    return false;
+  }
+
+  // Sum of the triangle angles at vertex w, with vertex v placed at x.
+  double angle_sum(int w, int v, const Vec2d& x) const {
+    double sum = 0;
+    for (int f : topo_.vertex_faces(w)) {
+      const Face& F = faces_[f];
+      const int k = F[0] == w ? 0 : (F[1] == w ? 1 : 2);
+      auto at = [&](int u) { return u == v ? x : uv_[u]; };
+      const Vec2d c = at(F[k]), a = at(F[(k + 1) % 3]) - c, b = at(F[(k + 2) % 3]) - c;
+      sum += std::atan2(cross(a, b), dot(a, b));
+    }
+    return sum;
+  }
+
+  // Keeps the boundary simple when boundary vertex v moves to x (interior vertices always pass).
+  bool boundary_ok(int v, const Vec2d& x) {
+    if (bnext_[v] < 0) return true;
+    const int p = bprev_[v], n = bnext_[v];
+    constexpr double kMaxAngle = 2 * M_PI * (1 - 1e-9);
+    if (angle_sum(v, v, x) >= kMaxAngle || angle_sum(p, v, x) >= kMaxAngle || angle_sum(n, v, x) >= kMaxAngle)
+      return false;
+    return !crosses_boundary(p, v, uv_[p], x) && !crosses_boundary(v, n, x, uv_[n]);
+  }
+
+  void move_vertex(int v, const Vec2d& x) {
+    if (bnext_[v] >= 0 && !grid_.empty()) {
+      grid_edit(v, uv_[v], uv_[bnext_[v]], false);
+      grid_edit(bprev_[v], uv_[bprev_[v]], uv_[v], false);
+      uv_[v] = x;
+      grid_edit(v, uv_[v], uv_[bnext_[v]], true);
+      grid_edit(bprev_[v], uv_[bprev_[v]], uv_[v], true);
+    } else {
+      uv_[v] = x;
+    }
   }
 
   const std::vector<Face>& faces_;
@@ -288,9 +402,91 @@ class Optimizer {
   Topology topo_;
   double area3_ = 0, s1_ = 0, s2_ = 0, pen_ = 0, k2_ = 1, tau_ = 0;
   bool valid_ = true;
+  std::vector<int> bprev_, bnext_;
+  std::vector<std::vector<int>> grid_;
+  std::vector<unsigned> stamp_;
+  unsigned stamp_id_ = 0;
+  Vec2d grid_lo_;
+  double cell_ = 1;
+  int grid_n_ = 0, grid_m_ = 0;
 };
 
+// Sutherland–Hodgman clip of a convex polygon by the half-plane left of a→b.
+std::vector<Vec2d> clip_left(const std::vector<Vec2d>& poly, const Vec2d& a, const Vec2d& b) {
+  std::vector<Vec2d> out;
+  const size_t n = poly.size();
+  for (size_t i = 0; i < n; ++i) {
+    const Vec2d& p = poly[i];
+    const Vec2d& q = poly[(i + 1) % n];
+    const double sp = cross(b - a, p - a), sq = cross(b - a, q - a);
+    if (sp >= 0) out.push_back(p);
+    if ((sp >= 0) != (sq >= 0)) out.push_back(p + (q - p) * (sp / (sp - sq)));
+  }
+  return out;
+}
+
 }  // namespace
+
+int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, int max_passes) {
+  const Topology topo(faces, static_cast<int>(uv.size()));
+  auto flipped = [&](int f) {
+    const Face& t = faces[f];
+    return !(signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) > 0);
+  };
+  int remaining = 0;
+  for (int pass = 0; pass < max_passes; ++pass) {
+    std::vector<int> verts;
+    for (int f = 0; f < static_cast<int>(faces.size()); ++f)
+      if (flipped(f))
+        for (int k = 0; k < 3; ++k) verts.push_back(faces[f][k]);
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    remaining = 0;
+    for (int f = 0; f < static_cast<int>(faces.size()); ++f) remaining += flipped(f) ? 1 : 0;
+    if (remaining == 0) return 0;
+    for (int v : verts) {
+      // Kernel: the points left of the far edge of every triangle around v.
+      double lo_x = kInf, lo_y = kInf, hi_x = -kInf, hi_y = -kInf;
+      Vec2d mean;
+      int count = 0;
+      for (int w : topo.vertex_neighbors(v)) {
+        lo_x = std::min(lo_x, uv[w].x);
+        hi_x = std::max(hi_x, uv[w].x);
+        lo_y = std::min(lo_y, uv[w].y);
+        hi_y = std::max(hi_y, uv[w].y);
+        mean += uv[w];
+        ++count;
+      }
+      if (count == 0) continue;
+      mean /= count;
+      const double pad = std::max(hi_x - lo_x, hi_y - lo_y);
+      std::vector<Vec2d> poly = {{lo_x - pad, lo_y - pad}, {hi_x + pad, lo_y - pad}, {hi_x + pad, hi_y + pad},
+                                 {lo_x - pad, hi_y + pad}};
+      for (int f : topo.vertex_faces(v)) {
+        const Face& t = faces[f];
+        const int k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+        poly = clip_left(poly, uv[t[(k + 1) % 3]], uv[t[(k + 2) % 3]]);
+        if (poly.size() < 3) break;
+      }
+      double area2 = 0;
+      Vec2d c;
+      for (size_t i = 0; poly.size() >= 3 && i < poly.size(); ++i) {
+        const Vec2d& p = poly[i];
+        const Vec2d& q = poly[(i + 1) % poly.size()];
+        const double w = cross(p, q);
+        area2 += w;
+        c += (p + q) * w;
+      }
+      if (area2 > 1e-12 * pad * pad)
+        uv[v] = c / (3 * area2);
+      else if (!topo.is_boundary_vertex(v))
+        uv[v] = mean;  // no kernel yet: smoothing lets the neighbours unfold first
+    }
+  }
+  remaining = 0;
+  for (int f = 0; f < static_cast<int>(faces.size()); ++f) remaining += flipped(f) ? 1 : 0;
+  return remaining;
+}
 
 OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
                                 std::vector<Vec2d>& uv, const OptimizeOptions& options) {

@@ -76,3 +76,55 @@ TEST_CASE("a flipped parameterization is reported and not moved", "[optimize]") 
   CHECK(r.after.flipped > 0);
   CHECK(p.uv == before);
 }
+
+TEST_CASE("untangle repairs a local fold-over", "[optimize]") {
+  Patch p = bump_patch(10, 0.3);
+  // Push one interior vertex across its neighbours: its ring folds over.
+  const int v = 5 * 11 + 5;
+  p.uv[v] = p.uv[v] + Vec2d{0.5, 0.3};
+  int flipped = 0;
+  for (const auto& f : p.faces) flipped += signed_area(p.uv[f[0]], p.uv[f[1]], p.uv[f[2]]) > 0 ? 0 : 1;
+  REQUIRE(flipped > 0);
+  CHECK(untangle(p.faces, p.uv) == 0);
+  for (const auto& f : p.faces) CHECK(signed_area(p.uv[f[0]], p.uv[f[1]], p.uv[f[2]]) > 0);
+}
+
+TEST_CASE("optimization never makes the boundary cross itself", "[optimize]") {
+  // A U: two fingers rising from a base with a narrow slot between them. In 3D the fingers are
+  // 2.5 times wider than in the texture, so the isometric layout overlaps itself and lowering
+  // stretch pushes the fingers into each other; the optimizer must stop at contact.
+  Patch p;
+  const int n = 10, slot = 2;  // cells per unit; slot width in cells
+  const int w = 2 * n + slot;  // cells across
+  std::vector<int> id((w + 1) * (2 * n + 1), -1);
+  for (int j = 0; j <= 2 * n; ++j)
+    for (int i = 0; i <= w; ++i) {
+      if (j > n && i > n && i < n + slot) continue;
+      const double x = double(i) / n, y = double(j) / n;
+      const double right = double(n + slot) / n + 0.5;  // centre of the right finger
+      const double x3 = y > 1 ? (i <= n ? 0.5 + (x - 0.5) * 2.5 : right + (x - right) * 2.5) : x;
+      id[j * (w + 1) + i] = static_cast<int>(p.uv.size());
+      p.positions.push_back({x3, y, 0});
+      p.uv.push_back({x, y});
+    }
+  for (int j = 0; j < 2 * n; ++j)
+    for (int i = 0; i < w; ++i) {
+      if (j >= n && i >= n && i < n + slot) continue;  // the slot's cells
+      const int a = id[j * (w + 1) + i], b = id[j * (w + 1) + i + 1];
+      const int c = id[(j + 1) * (w + 1) + i], d = id[(j + 1) * (w + 1) + i + 1];
+      p.faces.push_back({a, b, d});
+      p.faces.push_back({a, d, c});
+    }
+  auto tris = [&] {
+    std::vector<std::array<Vec2d, 3>> t;
+    for (const auto& f : p.faces) t.push_back({p.uv[f[0]], p.uv[f[1]], p.uv[f[2]]});
+    return t;
+  };
+  REQUIRE(overlapping_uv_pairs(tris()).empty());
+  OptimizeOptions o;
+  o.passes = 30;
+  const OptimizeResult r = optimize_stretch(p.positions, p.faces, p.uv, o);
+  CHECK(r.after.flipped == 0);
+  CHECK(r.after.l2 < r.before.l2);
+  CHECK(overlapping_uv_pairs(tris()).empty());
+}

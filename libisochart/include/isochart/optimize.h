@@ -37,6 +37,13 @@ struct OptimizeResult {
   int sweeps = 0;
 };
 
+/// Removes flipped triangles from a chart's parameterization, as far as local moves can: each
+/// vertex of a flipped triangle moves to the centroid of its 1-ring kernel (Iso-charts §6: "if a
+/// vertex is not in the convex kernel of its neighborhood, we relocate it to the centroid of the
+/// kernel"), or, when the kernel is empty, to the mean of its neighbours, for up to `max_passes`
+/// sweeps. Returns the number of flipped or degenerate triangles left.
+int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, int max_passes = 30);
+
 /// Optimizes per-vertex texture coordinates `uv` (#V) of a chart (positions #V, faces #F, CCW in
 /// texture space) in place, reducing the normalized L2 stretch while pushing every triangle's
 /// max(Γ, 1/γ) under the Linf margin. Each vertex moves by random line searches inside the kernel
