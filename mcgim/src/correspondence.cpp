@@ -14,6 +14,7 @@
 #include <limits>
 
 #include "aabb.h"
+#include "closest_point.h"
 #include "isochart/error.h"
 
 namespace mcgim {
@@ -22,22 +23,6 @@ namespace {
 
 using isochart::Vec2d;
 using isochart::Vec3d;
-
-// Barycentric coordinates of the point of the triangle (a, b, c) nearest to p (Ericson 3.4).
-Vec3d barycentric_3d(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  const Vec3d v0 = b - a, v1 = c - a, v2 = p - a;
-  const double d00 = dot(v0, v0), d01 = dot(v0, v1), d11 = dot(v1, v1);
-  const double d20 = dot(v2, v0), d21 = dot(v2, v1);
-  const double den = d00 * d11 - d01 * d01;
-  if (!(den > 0)) return {1.0 / 3, 1.0 / 3, 1.0 / 3};
-  double v = (d11 * d20 - d01 * d21) / den, w = (d00 * d21 - d01 * d20) / den;
-  double u = 1 - v - w;
-  u = std::max(u, 0.0);
-  v = std::max(v, 0.0);
-  w = std::max(w, 0.0);
-  const double s = u + v + w;
-  return {u / s, v / s, w / s};
-}
 
 }  // namespace
 
@@ -96,7 +81,7 @@ std::vector<Correspondence> shoot_normals(const GeometryImage& fine, const Geome
       }
       c.distance = norm(c.point - p);
       const auto& fv = coarse.mesh.faces[c.face];
-      c.barycentric = barycentric_3d(c.point, coarse.mesh.positions[fv[0]], coarse.mesh.positions[fv[1]],
+      c.barycentric = detail::barycentric_of(c.point, coarse.mesh.positions[fv[0]], coarse.mesh.positions[fv[1]],
                                      coarse.mesh.positions[fv[2]]);
       const auto& s = coarse.face_samples[c.face];
       const double b[3] = {c.barycentric.x, c.barycentric.y, c.barycentric.z};

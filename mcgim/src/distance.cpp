@@ -6,10 +6,12 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "aabb.h"
+#include "closest_point.h"
 #include "isochart/error.h"
 #include "mcgim/psnr.h"
 #include "rng.h"
@@ -71,6 +73,39 @@ std::vector<double> distances2(const std::vector<Vec3d>& pts, const detail::Tria
 }
 
 }  // namespace
+
+namespace detail {
+
+struct ClosestPoints::Impl {
+  explicit Impl(const Mesh& m) : set(m) {}
+  TriangleSet set;
+};
+
+ClosestPoints::ClosestPoints(const Mesh& mesh) : impl_(std::make_unique<Impl>(mesh)) {}
+ClosestPoints::~ClosestPoints() = default;
+bool ClosestPoints::empty() const { return impl_->set.empty(); }
+
+ClosestPoints::Hit ClosestPoints::closest(const Vec3d& p) const {
+  const auto cp = impl_->set.tree.closest_point_and_primitive(to_point(p));
+  return {impl_->set.face_of(cp.second), to_vec(cp.first)};
+}
+
+Vec3d barycentric_of(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d v0 = b - a, v1 = c - a, v2 = p - a;
+  const double d00 = dot(v0, v0), d01 = dot(v0, v1), d11 = dot(v1, v1);
+  const double d20 = dot(v2, v0), d21 = dot(v2, v1);
+  const double den = d00 * d11 - d01 * d01;
+  if (!(den > 0)) return {1.0 / 3, 1.0 / 3, 1.0 / 3};
+  double v = (d11 * d20 - d01 * d21) / den, w = (d00 * d21 - d01 * d20) / den;
+  double u = 1 - v - w;
+  u = std::max(u, 0.0);
+  v = std::max(v, 0.0);
+  w = std::max(w, 0.0);
+  const double s = u + v + w;
+  return {u / s, v / s, w / s};
+}
+
+}  // namespace detail
 
 double psnr_db(double peak, double d) {
   if (!(d > 0)) return std::numeric_limits<double>::infinity();

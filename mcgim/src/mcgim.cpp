@@ -26,6 +26,7 @@ void check_options(const LevelOptions& o) {
         " is outside 2..16384");
   if (o.gutter < 1) bad("the gutter must be at least 1 texel");
   if (o.optimize_iterations < 0) bad("optimize_iterations must be >= 0");
+  if (o.geometric_iterations < 0) bad("geometric_iterations must be >= 0");
   if (!(o.optimize_regularization > 0)) bad("optimize_regularization must be > 0");
 }
 
@@ -59,7 +60,7 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
   lv.remesh = reconstruct(lv.image);
   st.seconds_reconstruction = since(t0);
 
-  if (o.optimize && o.optimize_iterations > 0) {
+  if (o.optimize && o.optimize_iterations + o.geometric_iterations > 0) {
     t0 = Clock::now();
     detail::optimize_samples(a, pl, sm.param, o, lv.image, lv.remesh, progress);
     st.seconds_optimization = since(t0);

@@ -2,11 +2,13 @@
 
 #include <Eigen/Sparse>
 #include <Eigen/IterativeLinearSolvers>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
 
+#include "closest_point.h"
 #include "isochart/error.h"
 
 namespace mcgim::detail {
@@ -97,24 +99,120 @@ std::vector<FitPoint> fit_points(const AtlasCharts& a, const Placement& pl, cons
   return pts;
 }
 
+// Points spread over the original faces (centroids of an n×n subdivision, about two per
+// texel of surface), with the area each stands for.
+void surface_points(const Mesh& mesh, double texel_area, std::vector<Vec3d>& pts, std::vector<double>& area) {
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Vec3d p0 = mesh.positions[mesh.faces[f][0]], p1 = mesh.positions[mesh.faces[f][1]],
+                p2 = mesh.positions[mesh.faces[f][2]];
+    const double ar = isochart::triangle_area(p0, p1, p2);
+    const int n = std::clamp(static_cast<int>(std::ceil(std::sqrt(2.0 * ar / texel_area))), 1, 64);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; i + j < n; ++j)
+        for (int up = 0; up < 2; ++up) {
+          if (up == 1 && i + j + 1 >= n) continue;
+          const double u = up == 0 ? (i + 1.0 / 3) / n : (i + 2.0 / 3) / n;
+          const double v = up == 0 ? (j + 1.0 / 3) / n : (j + 2.0 / 3) / n;
+          pts.push_back(p0 * (1 - u - v) + p1 * u + p2 * v);
+          area.push_back(ar / (n * n));
+        }
+  }
+}
+
+// Geometric correspondences (Hoppe et al. 1993's distance energy, both ways): each original
+// point to its closest point on the remesh, and each remesh face centroid to its closest point
+// on the original.
+std::vector<FitPoint> closest_points(const ClosestPoints& original, const std::vector<Vec3d>& pts,
+                                     const std::vector<double>& area, const Remesh& r) {
+  const ClosestPoints remesh(r.mesh);
+  const std::size_t no = pts.size();
+  const int nf = r.mesh.num_faces();
+  std::vector<FitPoint> out(no + static_cast<std::size_t>(nf));
+  if (remesh.empty()) return {};
+  tbb::parallel_for(std::size_t(0), no, [&](std::size_t k) {
+    const ClosestPoints::Hit h = remesh.closest(pts[k]);
+    const auto& f = r.mesh.faces[h.face];
+    out[k] = {h.face,
+              barycentric_of(h.point, r.mesh.positions[f[0]], r.mesh.positions[f[1]], r.mesh.positions[f[2]]),
+              pts[k], area[k]};
+  });
+  tbb::parallel_for(0, nf, [&](int f) {
+    const auto& F = r.mesh.faces[f];
+    const Vec3d a = r.mesh.positions[F[0]], b = r.mesh.positions[F[1]], c = r.mesh.positions[F[2]];
+    const ClosestPoints::Hit h = original.closest((a + b + c) / 3.0);
+    out[no + f] = {f, {1.0 / 3, 1.0 / 3, 1.0 / 3}, h.point, isochart::triangle_area(a, b, c)};
+  });
+  return out;
+}
+
+// Least squares: Σ area·|Σ w_i x_i − target|² + λ Σ |x_v − anchor_v|², then each vertex kept
+// within `max_move` of its anchor; writes the positions back to the image and rebuilds the
+// remesh (the shorter diagonals may change).
+void solve(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& group_anchor, double lambda,
+           double max_move, GeometryImage& im, Remesh& r) {
+  const int nv = r.mesh.num_vertices();
+  std::vector<Vec3d> anchor(nv);
+  for (std::size_t i = 0; i < im.group.size(); ++i)
+    if (r.sample_vertex[i] >= 0) anchor[r.sample_vertex[i]] = group_anchor[im.group[i]];
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(pts.size() * 9 + nv);
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nv, 3);
+  for (const FitPoint& p : pts) {
+    const auto& f = r.mesh.faces[p.face];
+    const double w[3] = {p.weights.x, p.weights.y, p.weights.z};
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) trip.emplace_back(f[i], f[j], p.area * w[i] * w[j]);
+      for (int d = 0; d < 3; ++d) rhs(f[i], d) += p.area * w[i] * p.target[d];
+    }
+  }
+  for (int v = 0; v < nv; ++v) {
+    trip.emplace_back(v, v, lambda);
+    for (int d = 0; d < 3; ++d) rhs(v, d) += lambda * anchor[v][d];
+  }
+  Eigen::SparseMatrix<double> A(nv, nv);
+  A.setFromTriplets(trip.begin(), trip.end());
+  // A mass matrix plus a diagonal: well conditioned, so diagonally preconditioned conjugate
+  // gradients from the current positions converge in a few dozen iterations (a direct
+  // factorization fills in badly on image-sized grids).
+  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> solver;
+  solver.setTolerance(1e-8);
+  solver.setMaxIterations(200);
+  solver.compute(A);
+  Eigen::MatrixXd x(nv, 3);
+  for (int d = 0; d < 3; ++d) {
+    Eigen::VectorXd guess(nv);
+    for (int v = 0; v < nv; ++v) guess(v) = r.mesh.positions[v][d];
+    x.col(d) = solver.solveWithGuess(rhs.col(d), guess);
+  }
+  std::vector<Vec3d> pos(nv);
+  for (int v = 0; v < nv; ++v) {
+    const Vec3d d = Vec3d{x(v, 0), x(v, 1), x(v, 2)} - anchor[v];
+    const double len = norm(d);
+    pos[v] = anchor[v] + (len > max_move ? d * (max_move / len) : d);
+  }
+  for (std::size_t i = 0; i < im.group.size(); ++i)
+    if (r.sample_vertex[i] >= 0) im.positions[i] = pos[r.sample_vertex[i]];
+  r = reconstruct(im);
+}
+
 }  // namespace
 
 void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vector<Vec2d>& param,
                       const LevelOptions& o, GeometryImage& im, Remesh& r, const isochart::Progress& progress) {
   const int defined = im.defined_samples();
-  if (defined == 0) return;
+  if (defined == 0 || r.mesh.num_faces() == 0) return;
   const double texel_area = a.surface_area / defined;
   const double lambda = o.optimize_regularization * texel_area;
-  // The pull is towards the zippered positions, which lie on the original surface. Kept per
-  // group: the remesh's vertex numbering may change when pockets appear or vanish.
+  // No sample moves by more than a texel from where zippering put it (on the surface).
+  const double max_move = std::sqrt(texel_area);
+  // The pull is towards the zippered positions. Kept per group: the remesh's vertex numbering
+  // may change when pockets appear or vanish.
   std::vector<Vec3d> group_anchor(im.num_groups);
   for (std::size_t i = 0; i < im.group.size(); ++i)
     if (im.group[i] >= 0) group_anchor[im.group[i]] = im.positions[i];
+  const int passes = o.optimize_iterations + o.geometric_iterations;
   for (int it = 0; it < o.optimize_iterations; ++it) {
-    std::vector<Vec3d> anchor(r.mesh.num_vertices());
-    for (std::size_t i = 0; i < im.group.size(); ++i)
-      if (r.sample_vertex[i] >= 0) anchor[r.sample_vertex[i]] = group_anchor[im.group[i]];
-    isochart::report(progress, isochart::Stage::Optimization, static_cast<double>(it) / o.optimize_iterations);
+    isochart::report(progress, isochart::Stage::Optimization, static_cast<double>(it) / passes);
     std::vector<FitPoint> pts = fit_points(a, pl, param, im, r);
     // Points far from their triangle come from charts contracted or forced at this resolution,
     // where the texture-space correspondence says nothing about the surface: leave them out.
@@ -128,54 +226,18 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
                                return squared_norm(q - p.target) > reach2;
                              }),
               pts.end());
-    const int nv = r.mesh.num_vertices();
-    std::vector<Eigen::Triplet<double>> trip;
-    trip.reserve(pts.size() * 9 + nv);
-    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nv, 3);
-    for (const FitPoint& p : pts) {
-      const auto& f = r.mesh.faces[p.face];
-      const double w[3] = {p.weights.x, p.weights.y, p.weights.z};
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) trip.emplace_back(f[i], f[j], p.area * w[i] * w[j]);
-        rhs(f[i], 0) += p.area * w[i] * p.target.x;
-        rhs(f[i], 1) += p.area * w[i] * p.target.y;
-        rhs(f[i], 2) += p.area * w[i] * p.target.z;
-      }
+    solve(pts, group_anchor, lambda, max_move, im, r);
+  }
+  if (o.geometric_iterations > 0) {
+    const ClosestPoints original(*a.mesh);
+    std::vector<Vec3d> pts;
+    std::vector<double> area;
+    surface_points(*a.mesh, texel_area, pts, area);
+    for (int it = 0; it < o.geometric_iterations && !original.empty(); ++it) {
+      isochart::report(progress, isochart::Stage::Optimization,
+                       static_cast<double>(o.optimize_iterations + it) / passes);
+      solve(closest_points(original, pts, area, r), group_anchor, lambda, max_move, im, r);
     }
-    for (int v = 0; v < nv; ++v) {
-      trip.emplace_back(v, v, lambda);
-      rhs(v, 0) += lambda * anchor[v].x;
-      rhs(v, 1) += lambda * anchor[v].y;
-      rhs(v, 2) += lambda * anchor[v].z;
-    }
-    Eigen::SparseMatrix<double> A(nv, nv);
-    A.setFromTriplets(trip.begin(), trip.end());
-    // The system is a mass matrix plus a diagonal: well conditioned, so diagonally
-    // preconditioned conjugate gradients from the current positions converge in a few dozen
-    // iterations (a direct factorization fills in badly on image-sized grids).
-    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> solver;
-    solver.setTolerance(1e-8);
-    solver.setMaxIterations(200);
-    solver.compute(A);
-    Eigen::MatrixXd x0(nv, 3);
-    for (int v = 0; v < nv; ++v) {
-      x0(v, 0) = r.mesh.positions[v].x;
-      x0(v, 1) = r.mesh.positions[v].y;
-      x0(v, 2) = r.mesh.positions[v].z;
-    }
-    Eigen::MatrixXd x(nv, 3);
-    for (int d = 0; d < 3; ++d) x.col(d) = solver.solveWithGuess(rhs.col(d), x0.col(d));
-    // No sample moves by more than a texel from where zippering put it.
-    const double max_move = std::sqrt(texel_area);
-    std::vector<Vec3d> pos(nv);
-    for (int v = 0; v < nv; ++v) {
-      const Vec3d d = Vec3d{x(v, 0), x(v, 1), x(v, 2)} - anchor[v];
-      const double len = norm(d);
-      pos[v] = anchor[v] + (len > max_move ? d * (max_move / len) : d);
-    }
-    for (std::size_t i = 0; i < im.group.size(); ++i)
-      if (r.sample_vertex[i] >= 0) im.positions[i] = pos[r.sample_vertex[i]];
-    r = reconstruct(im);
   }
   isochart::report(progress, isochart::Stage::Optimization, 1.0);
 }

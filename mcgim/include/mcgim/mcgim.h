@@ -29,10 +29,16 @@ struct LevelOptions {
   bool repack = true;
   int gutter = 1;  ///< texels between charts when re-packing (≥ 1)
   /// Move the samples (welded groups together) towards the original surface after
-  /// zippering: a least-squares fit of the reconstructed surface to points of the original
-  /// surface at their texture positions, with a pull towards the sampled positions.
+  /// zippering (Sander et al. 2003's final optimization): least-squares fits of the
+  /// reconstructed surface to points of the original surface, with a pull towards the sampled
+  /// positions; no sample moves by more than a texel.
   bool optimize = true;
-  int optimize_iterations = 1;  ///< fit passes (each re-picks the diagonals and refits)
+  /// Parametric passes: original points matched through their texture coordinates (cheap).
+  int optimize_iterations = 1;
+  /// Geometric passes after those: original points matched to their closest remesh points and
+  /// remesh face centroids to their closest original points (exact, about 0.3 s per pass per
+  /// 50k samples on 2 cores). Each pass re-picks the shorter diagonals.
+  int geometric_iterations = 2;
   /// Weight of the pull towards the sampled positions, relative to the fit, per unit of
   /// texel area. Small values fit harder; it keeps samples without data in place.
   double optimize_regularization = 0.02;
