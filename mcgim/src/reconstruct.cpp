@@ -138,7 +138,7 @@ Remesh reconstruct(const GeometryImage& im) {
   }
   // A contracted seam can also close a few triangles into a small closed surface touching the
   // rest only at a vertex. Of the edge-connected pieces that touch at vertices, keep the one
-  // with the most faces.
+  // with the most faces and drop the other closed ones.
   {
     const int nt = static_cast<int>(tris.size());
     // Undirected edges bucketed by their smaller group: (larger group, triangle).
@@ -155,13 +155,22 @@ Remesh reconstruct(const GeometryImage& im) {
         edges[fill[std::min(a, b)]++] = {std::max(a, b), i};
       }
     detail::UnionFind pieces(nt);
+    std::vector<char> on_boundary(nt, 0);  // the triangle has an edge no other triangle shares
     for (int g = 0; g < im.num_groups; ++g) {
       std::sort(edges.begin() + offset[g], edges.begin() + offset[g + 1]);
-      for (int x = offset[g] + 1; x < offset[g + 1]; ++x)
-        if (edges[x].first == edges[x - 1].first) pieces.unite(edges[x].second, edges[x - 1].second);
+      for (int x = offset[g]; x < offset[g + 1]; ++x) {
+        const bool same_prev = x > offset[g] && edges[x].first == edges[x - 1].first;
+        const bool same_next = x + 1 < offset[g + 1] && edges[x].first == edges[x + 1].first;
+        if (same_prev) pieces.unite(edges[x].second, edges[x - 1].second);
+        if (!same_prev && !same_next) on_boundary[edges[x].second] = 1;
+      }
     }
     std::vector<int> piece_faces(nt, 0);
-    for (int i = 0; i < nt; ++i) ++piece_faces[pieces.find(i)];
+    std::vector<char> piece_open(nt, 0);
+    for (int i = 0; i < nt; ++i) {
+      ++piece_faces[pieces.find(i)];
+      if (on_boundary[i]) piece_open[pieces.find(i)] = 1;
+    }
     // Pieces sharing a vertex: cluster them through the groups.
     detail::UnionFind clusters(nt);
     std::vector<int> group_piece(im.num_groups, -1);
@@ -180,7 +189,9 @@ Remesh reconstruct(const GeometryImage& im) {
     std::size_t out = 0;
     for (int i = 0; i < nt; ++i) {
       const int p = pieces.find(i);
-      if (best[clusters.find(p)] != p) {
+      // Only closed pieces are pockets: an open sheet touching another one at a vertex (two
+      // holes pinched together) is surface, not an artefact.
+      if (best[clusters.find(p)] != p && !piece_open[p]) {
         ++r.pocket_faces;
         continue;
       }

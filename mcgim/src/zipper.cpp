@@ -82,62 +82,51 @@ std::vector<double> align_ring(const std::vector<Vec2d>& loop_pts, const std::ve
     }
   rotation = best_j;
   anchor_param = best_e + fr[static_cast<std::size_t>(best_j) * L + best_e];
-  const Vec2d anchor_pt = loop_pts[best_e] * (1 - fr[static_cast<std::size_t>(best_j) * L + best_e]) +
-                          loop_pts[(best_e + 1) % L] * fr[static_cast<std::size_t>(best_j) * L + best_e];
+  const double anchor_f = fr[static_cast<std::size_t>(best_j) * L + best_e];
 
-  struct Cand {
-    double r, cost, dp;
-    int back;
+  // Dense dynamic programming over (ring sample, loop edge): sample k maps to its closest point
+  // on one edge; edges are taken in loop order from the anchor, state q = 0 being the anchor's
+  // edge after the anchor, q = L the same edge before it. Staying on an edge is always
+  // allowed (closest points on one edge need not come in order; the parameters are made
+  // monotone afterwards), so the alignment always exists.
+  const int Q = L + 1;
+  auto edge_of = [&](int q) { return (best_e + (q == L ? 0 : q)) % L; };
+  auto valid = [&](int j, int q) {
+    if (q != 0 && q != L) return true;
+    const double f = fr[static_cast<std::size_t>(j) * L + best_e];
+    return q == 0 ? f >= anchor_f : f < anchor_f;
   };
-  const double radius = 1.5;  // texels beyond the nearest edge still considered
-  std::vector<std::vector<Cand>> cands(m);
-  cands[0] = {{0.0, 0.0, 0.0, -1}};
+  auto param = [&](int j, int q) {
+    const double f = fr[static_cast<std::size_t>(j) * L + edge_of(q)];
+    return q == 0 ? f - anchor_f : (q == L ? L - anchor_f + f : q - anchor_f + f);
+  };
+  std::vector<int> back(static_cast<std::size_t>(m) * Q, -1);
+  std::vector<double> prev(Q, kInf), cur(Q, kInf);
+  prev[0] = 0.0;  // the anchor sample sits at the anchor
   for (int k = 1; k < m; ++k) {
     const int j = (rotation + k) % m;
-    const double lim = std::sqrt(dmin[j]) + radius;
-    auto& cs = cands[k];
-    for (int e = 0; e < L; ++e) {
-      const double d = d2[static_cast<std::size_t>(j) * L + e];
-      if (d > lim * lim) continue;
-      double r = e + fr[static_cast<std::size_t>(j) * L + e] - anchor_param;
-      if (r < 0) r += L;
-      cs.push_back({r, d + direction_cost(j, e), kInf, -1});
-    }
-    // Back at the anchor: always reachable, so the alignment always exists.
-    cs.push_back({static_cast<double>(L), squared_norm(ring_pts[j] - anchor_pt) + direction_cost(j, best_e), kInf, -1});
-    std::sort(cs.begin(), cs.end(), [](const Cand& x, const Cand& y) { return x.r < y.r || (x.r == y.r && x.cost < y.cost); });
-    // dp over predecessors with r' <= r, through a running minimum.
-    const auto& prev = cands[k - 1];
-    std::size_t p = 0;
     double run = kInf;
-    int run_idx = -1;
-    for (std::size_t c = 0; c < cs.size(); ++c) {
-      while (p < prev.size() && prev[p].r <= cs[c].r) {
-        if (prev[p].dp < run) {
-          run = prev[p].dp;
-          run_idx = static_cast<int>(p);
-        }
-        ++p;
+    int run_q = -1;
+    for (int q = 0; q < Q; ++q) {
+      if (prev[q] < run) {
+        run = prev[q];
+        run_q = q;
       }
-      if (run_idx >= 0) {
-        cs[c].dp = run + cs[c].cost;
-        cs[c].back = run_idx;
-      }
+      cur[q] = kInf;
+      if (run_q < 0 || !valid(j, q)) continue;
+      const int e = edge_of(q);
+      cur[q] = run + d2[static_cast<std::size_t>(j) * L + e] + direction_cost(j, e);
+      back[static_cast<std::size_t>(k) * Q + q] = run_q;
     }
+    std::swap(prev, cur);
   }
+  int q = static_cast<int>(std::min_element(prev.begin(), prev.end()) - prev.begin());
   std::vector<double> r(m, 0.0);
-  int idx = -1;
-  double best = kInf;
-  for (std::size_t c = 0; c < cands[m - 1].size(); ++c)
-    if (cands[m - 1][c].dp < best) {
-      best = cands[m - 1][c].dp;
-      idx = static_cast<int>(c);
-    }
-  if (m > 1 && idx < 0) throw isochart::Error("geometry image: ring alignment failed");
   for (int k = m - 1; k >= 1; --k) {
-    r[k] = cands[k][idx].r;
-    idx = cands[k][idx].back;
+    r[k] = param((rotation + k) % m, q);
+    q = back[static_cast<std::size_t>(k) * Q + q];
   }
+  for (int k = 1; k < m; ++k) r[k] = std::clamp(r[k], r[k - 1], static_cast<double>(L));
   return r;
 }
 
