@@ -170,7 +170,7 @@ int block_triangles(const LocalGrid& g, int bx, int by, std::array<std::array<in
 // triangle, pinch samples (two boundary wedges), all components but the largest, and a
 // path of samples cutting each hole open to the outer boundary. Returns the ring
 // (counter-clockwise in grid space) or an empty ring when nothing is left.
-std::vector<int> make_disk(LocalGrid& g, long long& removed) {
+std::vector<int> make_disk(LocalGrid& g, long long& removed, long long* cut_off = nullptr) {
   const int n = g.w * g.h;
   std::vector<unsigned char> out(n);
   std::vector<int> ring;
@@ -239,6 +239,7 @@ std::vector<int> make_disk(LocalGrid& g, long long& removed) {
       if (g.in[v] && uf.find(v) != best) {
         remove(v);
         changed = true;
+        if (cut_off) ++*cut_off;
       }
     if (changed) continue;
     // Boundary loops; the outer one has the largest signed area.
@@ -526,8 +527,27 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
     for (const auto& slit : a.charts[c].slits)
       for (std::size_t i = 0; i + 1 < slit.size(); ++i)
         remove_near_segment(g, pl.texel[c][slit[i]], pl.texel[c][slit[i + 1]], 0.75, r.removed);
-    remove_bridges(g, a.charts[c], pl.texel[c], r.removed);
-    std::vector<int> ring = make_disk(g, r.removed);
+    // Bridges across notches come out, unless that cuts off a part of the chart (a notch
+    // almost through it): losing the part costs more than a bridge, which zippering survives.
+    const LocalGrid whole = g;
+    long long bridged = 0, cleaned = 0, cut_off = 0;
+    remove_bridges(g, a.charts[c], pl.texel[c], bridged);
+    std::vector<int> ring = make_disk(g, cleaned, &cut_off);
+    const long long total = std::count(whole.in.begin(), whole.in.end(), 1);
+    if (cleaned > std::max(16LL, total / 50)) {
+      LocalGrid alt = whole;
+      long long alt_cleaned = 0, alt_cut_off = 0;
+      std::vector<int> alt_ring = make_disk(alt, alt_cleaned, &alt_cut_off);
+      if (!alt_ring.empty() && alt_cleaned + 16 < cleaned + bridged) {
+        g = std::move(alt);
+        ring = std::move(alt_ring);
+        bridged = 0;
+        cleaned = alt_cleaned;
+        cut_off = alt_cut_off;
+      }
+    }
+    r.removed += bridged + cleaned;
+    r.cut_off = cut_off;
     for (int v = 0; v < g.w * g.h; ++v)
       if (g.in[v]) r.samples.push_back(to_image(v));
     std::sort(r.samples.begin(), r.samples.end());
@@ -606,11 +626,9 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
                                a.vertex_normals[f[2]] * best_bary.z);
     ++s.forced;
   };
-  for (int c = 0; c < nc; ++c) {
-    if (!s.regions[c].ring.empty()) continue;
+  // Texels whose square the chart's triangles meet (conservative rasterization).
+  auto touched_texels = [&](int c) {
     const Chart& ch = a.charts[c];
-    ChartRegion& r = s.regions[c];
-    // Touched texels and their 4-neighbours.
     std::vector<int> cand;
     for (const Face& f : ch.local_faces) {
       const Vec2d& p0 = pl.texel[c][f[0]];
@@ -631,6 +649,84 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
           cand.push_back(im.index(x, y));
         }
     }
+    std::sort(cand.begin(), cand.end());
+    cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+    return cand;
+  };
+  // A part of a chart joined to the rest by a neck thinner than a sample was cut off above and
+  // would be contracted with all its surface. Such charts are tried again with the free texels
+  // they touch added, which carries the neck across; the result is kept when it holds more.
+  for (int c = 0; c < nc; ++c) {
+    ChartRegion& r = s.regions[c];
+    if (r.ring.empty() || r.cut_off < 16) continue;
+    std::vector<int> set = r.samples;
+    for (const Hit& h : hits[c])
+      if (free_for(c, h.sample % W, h.sample / W)) set.push_back(h.sample);
+    for (int t : touched_texels(c))
+      if (free_for(c, t % W, t / W)) set.push_back(t);
+    std::sort(set.begin(), set.end());
+    set.erase(std::unique(set.begin(), set.end()), set.end());
+    int x0 = W, y0 = H, x1 = -1, y1 = -1;
+    for (int i : set) {
+      x0 = std::min(x0, i % W);
+      x1 = std::max(x1, i % W);
+      y0 = std::min(y0, i / W);
+      y1 = std::max(y1, i / W);
+    }
+    LocalGrid g;
+    g.x0 = x0 - 1;
+    g.y0 = y0 - 1;
+    g.w = x1 - x0 + 3;
+    g.h = y1 - y0 + 3;
+    g.in.assign(static_cast<std::size_t>(g.w) * g.h, 0);
+    for (int i : set) g.in[g.at(i % W - g.x0, i / W - g.y0)] = 1;
+    long long dropped = 0;
+    std::vector<int> ring = make_disk(g, dropped);
+    auto to_image = [&](int v) { return (v / g.w + g.y0) * W + (v % g.w + g.x0); };
+    std::vector<int> samples;
+    for (int v = 0; v < g.w * g.h; ++v)
+      if (g.in[v]) samples.push_back(to_image(v));
+    if (ring.empty() || samples.size() < r.samples.size() + 16) continue;
+    for (int i : r.samples)
+      if (!std::binary_search(samples.begin(), samples.end(), i)) {
+        im.chart[i] = -1;
+        im.face[i] = -1;
+        im.barycentric[i] = {};
+        im.positions[i] = {};
+        im.normals[i] = {};
+      }
+    const Chart& ch = a.charts[c];
+    for (int i : samples) {
+      if (std::binary_search(r.samples.begin(), r.samples.end(), i)) continue;
+      // A covered sample keeps its exact location; a touched one goes to the closest point.
+      const auto hit = std::lower_bound(hits[c].begin(), hits[c].end(), i,
+                                        [](const Hit& h, int v) { return h.sample < v; });
+      if (hit != hits[c].end() && hit->sample == i) {
+        const Face& f = m.faces[ch.faces[hit->local_face]];
+        im.chart[i] = c;
+        im.face[i] = ch.faces[hit->local_face];
+        im.barycentric[i] = hit->bary;
+        im.positions[i] = face_point(m, im.face[i], hit->bary);
+        im.normals[i] = normalized(a.vertex_normals[f[0]] * hit->bary.x + a.vertex_normals[f[1]] * hit->bary.y +
+                                   a.vertex_normals[f[2]] * hit->bary.z);
+        --r.removed;
+        --s.removed;
+      } else {
+        define_closest(c, i);
+      }
+    }
+    for (int& v : ring) v = to_image(v);
+    std::rotate(ring.begin(), std::min_element(ring.begin(), ring.end()), ring.end());
+    if (pl.mirrored[c]) std::reverse(ring.begin() + 1, ring.end());
+    r.samples = std::move(samples);
+    r.ring = std::move(ring);
+  }
+  for (int c = 0; c < nc; ++c) {
+    if (!s.regions[c].ring.empty()) continue;
+    const Chart& ch = a.charts[c];
+    ChartRegion& r = s.regions[c];
+    // Touched texels and their 4-neighbours.
+    std::vector<int> cand = touched_texels(c);
     std::sort(cand.begin(), cand.end());
     cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
     const std::size_t touched = cand.size();

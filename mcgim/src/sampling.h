@@ -17,6 +17,7 @@ struct ChartRegion {
   // boundary loop; empty when the chart is empty.
   std::vector<int> ring;
   long long removed = 0;     // covered samples dropped by the cleanup
+  long long cut_off = 0;     // of those, samples of parts cut off from the rest (thin necks)
 };
 
 struct Sampling {
