@@ -4,6 +4,7 @@
 #include <tbb/global_control.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -279,4 +280,51 @@ TEST_CASE("sample centres on shared edges and vertices are defined once, without
   CHECK(wrong == 0);
   CHECK(lv.stats.topology.boundary_loops == 1);
   CHECK(lv.stats.topology.euler_characteristic == 1);
+}
+
+TEST_CASE("a chart part behind a neck thinner than a sample is kept", "[mcgim]") {
+  // A flat dumbbell, one chart: two squares joined by a neck a third of a texel wide at 32².
+  std::vector<double> xs, ys;
+  for (double x = 0.1; x < 0.9001; x += 0.05) xs.push_back(x);
+  for (double y = 0.1; y < 0.4001; y += 0.05) ys.push_back(y);
+  ys.push_back(0.245);
+  ys.push_back(0.255);
+  std::sort(ys.begin(), ys.end());
+  auto inside = [](double x, double y) {
+    const bool squares = y >= 0.1 - 1e-9 && y <= 0.4 + 1e-9 && (x <= 0.4 + 1e-9 || x >= 0.6 - 1e-9);
+    return squares || (y >= 0.245 - 1e-9 && y <= 0.255 + 1e-9);
+  };
+  isochart::Mesh m;
+  std::map<std::pair<int, int>, int> ids;
+  auto vid = [&](int i, int j) {
+    auto it = ids.find({i, j});
+    if (it != ids.end()) return it->second;
+    m.positions.push_back({xs[i], ys[j], 0.0});
+    ids[{i, j}] = m.num_vertices() - 1;
+    return m.num_vertices() - 1;
+  };
+  for (std::size_t j = 0; j + 1 < ys.size(); ++j)
+    for (std::size_t i = 0; i + 1 < xs.size(); ++i) {
+      if (!inside(0.5 * (xs[i] + xs[i + 1]), 0.5 * (ys[j] + ys[j + 1]))) continue;
+      const int a = vid(i, j), b = vid(i + 1, j), c = vid(i + 1, j + 1), d = vid(i, j + 1);
+      m.faces.push_back({a, b, c});
+      m.faces.push_back({a, c, d});
+    }
+  for (const auto& p : m.positions) m.uvs.push_back({p.x, p.y});
+  m.face_uvs = m.faces;
+  m.face_groups.assign(m.faces.size(), 0);
+  const Level lv = build_level(m, keep_layout(32, false));
+  // Each square covers about 9.6² sample centres; losing one would leave about 90.
+  CHECK(lv.stats.defined_samples > 150);
+  CHECK(lv.stats.topology.boundary_loops == 1);
+  CHECK(lv.stats.topology.euler_characteristic == 1);
+  CHECK(lv.stats.topology.manifold());
+  // Both squares are there: samples on the left and on the right of the neck.
+  int left = 0, right = 0;
+  for (std::size_t i = 0; i < lv.image.chart.size(); ++i) {
+    if (lv.image.chart[i] < 0) continue;
+    (lv.image.positions[i].x < 0.5 ? left : right) += 1;
+  }
+  CHECK(left > 70);
+  CHECK(right > 70);
 }
