@@ -1,0 +1,89 @@
+#pragma once
+/// Chart packing: lays out the charts of an atlas in [0,1]² for a W×H texture with a
+/// guaranteed gutter (Iso-charts §6, the four-horizon extension of the "Tetris" packer of
+/// Lévy et al. 2002).
+
+#include <vector>
+
+#include "isochart/mesh.h"
+#include "isochart/progress.h"
+#include "isochart/vec.h"
+
+namespace isochart {
+
+/// One chart to pack: a 2-D parameterization of a part of the surface.
+struct PackChart {
+  /// Per chart vertex; any position and scale. Faces should be counter-clockwise (the
+  /// packer only rotates and translates, so the winding it is given is the winding it returns).
+  std::vector<Vec2d> uv;
+  std::vector<Face> faces;  ///< chart-local vertex indices into `uv`
+  /// Surface area of the chart (units²). The packer scales the chart so that its UV area
+  /// equals this (§6 step 1), so all charts share one texel density. 0 means "unknown":
+  /// the chart's own UV area is used, i.e. the charts keep their relative UV scales.
+  double area_3d = 0;
+};
+
+struct PackOptions {
+  int width = 1024;   ///< target texture width in texels (1..16384)
+  int height = 1024;  ///< target texture height in texels (1..16384)
+  /// Minimum number of empty texels between two charts and between a chart and the texture
+  /// border, measured on the W×H grid with conservative rasterization (every texel a
+  /// triangle touches is the chart's) and a square neighbourhood (diagonals count).
+  int gutter = 2;
+  /// Orientations tried per chart, evenly spaced over 360° starting from the chart's
+  /// minimal-area bounding rectangle (16 in the paper). Rotations only, never mirroring.
+  int rotations = 16;
+  /// Extension beyond §6: before introducing a chart from one of the four sides (which
+  /// grows the packing), look for a place inside the current bounding box where it fits
+  /// (a hole left by earlier charts, or the open space above a horizon), touching as much
+  /// of its neighbourhood as possible.
+  bool fill_holes = true;
+  /// Extension beyond §6: pack in two orders, decreasing area (the paper) and decreasing
+  /// bounding-rectangle length, at every scale tried, and keep the better packing.
+  bool try_orders = true;
+  /// The scale search stops when the largest scale known to fit and the smallest known not
+  /// to fit differ by less than this factor.
+  double scale_tolerance = 0.005;
+};
+
+/// How one chart was moved: texel = scale · R(angle) · uv_in + offset, then uv = texel / (W, H).
+struct ChartPlacement {
+  double angle = 0;  ///< counter-clockwise rotation, radians
+  double scale = 0;  ///< texels per input UV unit
+  Vec2d offset;      ///< texels
+};
+
+struct PackResult {
+  double packing_ratio = 0;  ///< Σ chart UV area / area of the UV bounding box of all charts
+  double utilization = 0;    ///< Σ chart UV area / area of [0,1]² (texture coverage)
+  double texel_size = 0;     ///< surface length per texel, the same for all charts
+  double seconds = 0;        ///< wall time of pack_charts
+  int used_width = 0;        ///< texels spanned by the charts' conservative raster in x
+  int used_height = 0;       ///< same in y
+  int attempts = 0;          ///< packings tried by the scale search (per order)
+  bool by_height = false;    ///< the kept packing used the decreasing-length order
+  std::vector<ChartPlacement> placements;  ///< per input chart
+};
+
+/// Packs the charts in place (Iso-charts §6): rewrites every chart's `uv` into [0,1]² so that
+/// all charts share one texel density, no two charts come closer than `gutter` texels on the
+/// W×H grid, no chart comes closer than `gutter` texels to the border, and the packing is as
+/// large as it can be while fitting the texture (the scale is searched).
+///
+/// Steps: (1) scale each chart so its UV area equals its 3-D area; (2) sort by decreasing
+/// area; (3) for each chart, pick the direction pair by W_expect = H_curr·W/H (left/right
+/// when W_expect > W_curr, else top/bottom) and insert it from the side and in the rotation
+/// that waste the least space between the chart's horizon and the packing's horizon, as
+/// tracked by the four horizons. Charts are placed on a raster at the final texel size, so
+/// the gutter is exact. Extensions (see PackOptions): pre-rotation to the minimal-area
+/// bounding rectangle, filling holes inside the packing, a second order, a final compaction.
+///
+/// Deterministic, and identical for any number of TBB threads.
+/// \throw InputError for invalid options or charts (empty, index out of range, NaN,
+///        zero UV area, negative area), naming the chart, and when the charts cannot fit
+///        the texture at any scale (too many charts for its size and gutter).
+/// \throw Cancelled when `progress` returns false.
+PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& options = {},
+                       const Progress& progress = {});
+
+}  // namespace isochart
