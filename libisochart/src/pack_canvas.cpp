@@ -1,6 +1,8 @@
 #include "pack_canvas.h"
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include <tbb/blocked_range.h>
@@ -9,6 +11,16 @@
 namespace isochart::pack_detail {
 
 namespace {
+
+// Bit j (j < 8) set where byte j of `bytes` is at least `w`; bytes and w at most 127, so
+// the per-byte subtraction never borrows across bytes.
+inline unsigned bytes_at_least(const unsigned char* bytes, int w) {
+  std::uint64_t v;
+  std::memcpy(&v, bytes, sizeof v);
+  const std::uint64_t high = ((v | 0x8080808080808080ULL) - 0x0101010101010101ULL * static_cast<unsigned>(w)) &
+                             0x8080808080808080ULL;
+  return static_cast<unsigned>(((high >> 7) * 0x0102040810204080ULL) >> 56);
+}
 
 // Bits [shift, shift + 64) of a canvas row, for a raster word placed at bit offset `shift`.
 inline Word canvas_word(const Word* row, int word, int bit) {
@@ -34,7 +46,8 @@ Canvas::Canvas(int limit_w, int limit_h, int gutter, double growth_weight)
   block_count_.assign(static_cast<std::size_t>(blocks_x_) * blocks_y_, 0);
   block_sat_.assign(static_cast<std::size_t>(blocks_x_ + 1) * (blocks_y_ + 1), 0);
   // On the empty canvas the largest free square at (x, y) reaches the canvas's far sides.
-  square_.resize(static_cast<std::size_t>(width_) * height_);
+  // (16 spare bytes: rows are read 16 bytes at a time.)
+  square_.resize(static_cast<std::size_t>(width_) * height_ + 16);
   for (int y = 0; y < height_; ++y)
     for (int x = 0; x < width_; ++x)
       square_[static_cast<std::size_t>(y) * width_ + x] =
@@ -224,32 +237,46 @@ void Canvas::search_block(const ChartRaster& r, int rotation, int bx, int by, in
   // Feasibility of the positions of the block and of the ring of positions around it
   // (outside the allowed range counts as blocked, like a wall). `from_left`/`from_below`:
   // the neighbour position is free, so only the texels the move adds need testing.
+  // Positions in range whose probes all land on large enough free squares, one bit per
+  // position of a row of the block (bit j: x = bx − 1 + j).
+  constexpr int kSpan = kBlock + 2;
+  unsigned candidates[kSpan];
+  for (int y = by - 1; y <= bye + 1; ++y) {
+    unsigned mask = 0;
+    if (y >= ymin && y <= ymax) {
+      const int lo = std::max(bx - 1, xmin), hi = std::min(bxe + 1, xmax);
+      for (int x = lo; x <= hi; ++x) mask |= 1u << (x - bx + 1);
+      for (const Rect& p : r.probes) {
+        if (!mask) break;
+        const unsigned char* row = &square_[static_cast<std::size_t>(y + p.y) * width_ + bx - 1 + p.x];
+        mask &= bytes_at_least(row, p.w) | (bytes_at_least(row + 8, p.w) << 8);
+      }
+    }
+    candidates[y - by + 1] = mask;
+  }
   auto fits = [&](int x, int y, bool from_left, bool from_below) {
-    if (x < xmin || x > xmax || y < ymin || y > ymax) return false;
-    for (const Rect& p : r.probes)
-      if (square_[static_cast<std::size_t>(y + p.y) * width_ + x + p.x] < p.w) return false;
+    if (!((candidates[y - by + 1] >> (x - bx + 1)) & 1u)) return false;
+    if (surely_empty(x, y, x + r.w, y + r.h)) return true;
     if (from_left) return !collides(r.edge[static_cast<int>(Side::Right)], x, y);
     if (from_below) return !collides(r.edge[static_cast<int>(Side::Top)], x, y);
-    if (surely_empty(x, y, x + r.w, y + r.h)) return true;
     if (surely_crowded(x, y, x + r.w, y + r.h, r.texels)) return false;
     if (core.w > 0 && surely_occupied(x + core.x, y + core.y, x + core.x + core.w, y + core.y + core.h))
       return false;
     return !collides(r, x, y);
   };
-  constexpr int kSpan = kBlock + 2;
   bool free[kSpan][kSpan];
   for (int y = by - 1; y <= bye + 1; ++y)
     for (int x = bx - 1; x <= bxe + 1; ++x) {
       const int i = y - by + 1, j = x - bx + 1;
       free[i][j] = fits(x, y, j > 0 && free[i][j - 1], i > 0 && free[i - 1][j]);
     }
-  // Only a position that cannot move one texel in some direction is a candidate: the best
-  // fit is stuck against its neighbours.
+  // Only a position that cannot move one texel in two directions is a candidate: the best
+  // fit sits in a corner of the free space, like a piece pushed down and sideways.
   for (int y = by; y <= bye; ++y)
     for (int x = bx; x <= bxe; ++x) {
       const int i = y - by + 1, j = x - bx + 1;
       if (!free[i][j]) continue;
-      if (free[i - 1][j] && free[i + 1][j] && free[i][j - 1] && free[i][j + 1]) continue;
+      if (!free[i - 1][j] + !free[i + 1][j] + !free[i][j - 1] + !free[i][j + 1] < 2) continue;
       const int c = contact(r, x, y);
       const double fraction = static_cast<double>(c) / r.ring_size;
       if (c > 0 && (!best.valid || -fraction < best.cost)) best = {true, x, y, -fraction, rotation};

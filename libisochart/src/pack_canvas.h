@@ -103,9 +103,9 @@ class Canvas {
   int blocks_x_, blocks_y_;
   std::vector<int> block_count_;
   std::vector<long long> block_sat_;  // (blocks_y_+1) × (blocks_x_+1) summed-area table
-  // Side of the largest free square whose lower-left texel is (x, y), capped at 255, and its
+  // Side of the largest free square whose lower-left texel is (x, y), capped, and its
   // maximum per block: a chart fits only where its core's square does.
-  static constexpr int kSquareCap = 127;
+  static constexpr int kSquareCap = 63;
   std::vector<unsigned char> square_;
   std::vector<unsigned char> block_square_;
   // The same over super-blocks of kSuper × kSuper blocks, to skip crowded areas wholesale.

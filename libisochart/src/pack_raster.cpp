@@ -151,7 +151,7 @@ void finish_raster(ChartRaster& r) {
   // of a 3×3 grid over the raster. Large rasters use cells of 2×2 or 4×4 texels (a cell is
   // set when all its texels are), which keeps this linear in words rather than texels.
   {
-    constexpr int kCap = 127, kGrid = 3;
+    constexpr int kCap = 63, kGrid = 3;
     const int cell = std::max(r.w, r.h) >= 256 ? 4 : std::max(r.w, r.h) >= 64 ? 2 : 1;
     const int cw = r.w / cell, ch = r.h / cell;
     const Word full = (Word{1} << cell) - 1;

@@ -52,7 +52,7 @@ struct ChartRaster {
   long long texels = 0;  ///< set texels
   Rect core;             ///< a large rectangle of set texels, for early rejection
   /// Squares of set texels spread over the raster (largest first, at most 9, side ≥ 2,
-  /// capped at 127): wherever the chart fits, free squares at least as large sit there.
+  /// capped at 63): wherever the chart fits, free squares at least as large sit there.
   std::vector<Rect> probes;
   std::vector<int> test_rows;  ///< row order for collision tests: spread-out rows first
   /// The texels a one-texel move in each direction adds (indexed by Side: moving up (+y),
