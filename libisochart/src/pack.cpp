@@ -122,7 +122,7 @@ std::vector<Vec2d> texel_points(const Prepared& c, int k, int rotations, double 
 }
 
 std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int rotations,
-                                       double scale) {
+                                       double scale, int limit_w, int limit_h) {
   std::vector<ChartRaster> out(charts.size() * rotations);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size()),
                     [&](const tbb::blocked_range<std::size_t>& range) {
@@ -130,7 +130,7 @@ std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int 
                         const Prepared& c = charts[j / rotations];
                         const int k = static_cast<int>(j % rotations);
                         out[j] = pack_detail::rasterize_chart(texel_points(c, k, rotations, scale),
-                                                              *c.faces, c.outline);
+                                                              *c.faces, c.outline, limit_w, limit_h);
                       }
                     });
   return out;
@@ -205,9 +205,9 @@ Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations,
 
 void validate(const PackOptions& o) {
   auto bad = [](const std::string& m) { throw InputError("", m); };
-  if (o.width < 1 || o.width > 16384 || o.height < 1 || o.height > 16384)
+  if (o.width < 1 || o.width > 8192 || o.height < 1 || o.height > 8192)
     bad("pack: texture size " + std::to_string(o.width) + "x" + std::to_string(o.height) +
-        " is outside 1..16384");
+        " is outside 1..8192");
   if (o.gutter < 0) bad("pack: gutter " + std::to_string(o.gutter) + " is negative");
   if (o.width - 2 * o.gutter < 1 || o.height - 2 * o.gutter < 1)
     bad("pack: a gutter of " + std::to_string(o.gutter) + " texels leaves no room in a " +
@@ -259,7 +259,7 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
                                " texture with a gutter of " + std::to_string(g) + " texels");
     report(progress, Stage::Packing, std::min(0.95, attempts / 12.0));
     ++attempts;
-    const std::vector<ChartRaster> rasters = rasterize_all(prepared, rotations, scale);
+    const std::vector<ChartRaster> rasters = rasterize_all(prepared, rotations, scale, limit_w, limit_h);
     const double area_texels = total_area * scale * scale;
     std::vector<Attempt> tries(orders.size());
     tbb::parallel_for(0, static_cast<int>(orders.size()), [&](int o) {

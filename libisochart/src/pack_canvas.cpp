@@ -154,12 +154,6 @@ int Canvas::contact(const ChartRaster& r, int x, int y) const {
   return n;
 }
 
-long long Canvas::occupied() const {
-  long long n = 0;
-  for (const Word w : bits_) n += popcount(w);
-  return n;
-}
-
 long long Canvas::block_sum(int bx0, int by0, int bx1, int by1) const {
   const int stride = blocks_x_ + 1;
   return block_sat_[static_cast<std::size_t>(by1) * stride + bx1] -

@@ -63,8 +63,6 @@ class Canvas {
   int contact(const ChartRaster& r, int x, int y) const;
   /// Adds the raster, dilated by the gutter, at (x, y).
   void place(const ChartRaster& r, int x, int y);
-  /// Set canvas texels (the placed charts with their gutters).
-  long long occupied() const;
 
  private:
   static constexpr int kBlock = 8;  // coarse occupancy blocks for early rejection

@@ -100,8 +100,10 @@ Rect largest_rectangle(const ChartRaster& r) {
   return best;
 }
 
-// Allocates the raster around the points, and returns them in raster coordinates.
-std::vector<Vec2d> start_raster(const std::vector<Vec2d>& points, ChartRaster& r) {
+// Sizes the raster around the points; allocates it and returns the points in raster
+// coordinates unless it exceeds max_w × max_h.
+std::vector<Vec2d> start_raster(const std::vector<Vec2d>& points, ChartRaster& r,
+                                int max_w = 1 << 30, int max_h = 1 << 30) {
   double minx = std::numeric_limits<double>::infinity(), miny = minx, maxx = -minx, maxy = -minx;
   for (const Vec2d& p : points) {
     minx = std::min(minx, p.x);
@@ -110,8 +112,10 @@ std::vector<Vec2d> start_raster(const std::vector<Vec2d>& points, ChartRaster& r
     maxy = std::max(maxy, p.y);
   }
   r.origin = {std::floor(minx - kEps), std::floor(miny - kEps)};
-  r.w = static_cast<int>(std::floor(maxx + kEps) - r.origin.x) + 1;
-  r.h = static_cast<int>(std::floor(maxy + kEps) - r.origin.y) + 1;
+  const double w = std::floor(maxx + kEps) - r.origin.x + 1, h = std::floor(maxy + kEps) - r.origin.y + 1;
+  r.w = static_cast<int>(std::min(w, static_cast<double>(max_w) + 1));
+  r.h = static_cast<int>(std::min(h, static_cast<double>(max_h) + 1));
+  if (r.w > max_w || r.h > max_h) return {};
   r.words = words_for(r.w);
   r.bits.assign(static_cast<std::size_t>(r.h) * r.words, 0);
   std::vector<Vec2d> local(points.size());
@@ -300,9 +304,10 @@ ChartOutline chart_outline(const std::vector<Vec2d>& uv, const std::vector<Face>
 }
 
 ChartRaster rasterize_chart(const std::vector<Vec2d>& points, const std::vector<Face>& faces,
-                            const ChartOutline& outline) {
+                            const ChartOutline& outline, int max_w, int max_h) {
   ChartRaster r;
-  const std::vector<Vec2d> local = start_raster(points, r);
+  const std::vector<Vec2d> local = start_raster(points, r, max_w, max_h);
+  if (r.w > max_w || r.h > max_h) return r;
   // Texels the chain touches.
   for (const auto& e : outline.boundary) rasterize_triangle(local[e[0]], local[e[1]], local[e[1]], r);
   for (const int f : outline.bad_faces)

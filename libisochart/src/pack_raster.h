@@ -89,9 +89,10 @@ struct ChartOutline {
 ///        positive scale (signs of areas are what matter).
 ChartOutline chart_outline(const std::vector<Vec2d>& uv, const std::vector<Face>& faces);
 
-/// Rasterizes `points` (already rotated and scaled to texels) using the outline.
+/// Rasterizes `points` (already rotated and scaled to texels) using the outline. A raster
+/// wider than `max_w` or taller than `max_h` could never be placed: only its size is set.
 ChartRaster rasterize_chart(const std::vector<Vec2d>& points, const std::vector<Face>& faces,
-                            const ChartOutline& outline);
+                            const ChartOutline& outline, int max_w = 1 << 30, int max_h = 1 << 30);
 
 /// Reference rasterization, triangle by triangle (slow; for tests).
 ChartRaster rasterize_triangles(const std::vector<Vec2d>& points, const std::vector<Face>& faces);

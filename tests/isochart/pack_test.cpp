@@ -286,6 +286,21 @@ TEST_CASE("wide gutters, no gutter and a single rotation are honoured", "[pack]"
   }
 }
 
+TEST_CASE("a long sliver packs with the blobs", "[pack]") {
+  // 2000:1, so that most of its rotations do not fit the texture at all.
+  std::vector<PackChart> input = blobs(10, 13);
+  PackChart sliver;
+  sliver.uv = {{0, 0}, {2000, 0}, {2000, 1}, {0, 1}};
+  sliver.faces = {{0, 1, 2}, {0, 2, 3}};
+  sliver.area_3d = 20;
+  input.push_back(sliver);
+  std::vector<PackChart> charts = input;
+  PackOptions o;
+  o.width = o.height = 512;
+  const PackResult r = pack_charts(charts, o);
+  check_packing(input, charts, o, r);
+}
+
 TEST_CASE("a non-square target gives a packing of about its aspect", "[pack]") {
   const std::vector<PackChart> input = blobs(40, 3);
   std::vector<PackChart> charts = input;

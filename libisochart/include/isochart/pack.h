@@ -24,8 +24,11 @@ struct PackChart {
 };
 
 struct PackOptions {
-  int width = 1024;   ///< target texture width in texels (1..16384)
-  int height = 1024;  ///< target texture height in texels (1..16384)
+  /// Target texture size in texels (1..8192 each). The packer works on a canvas of twice
+  /// that size in each direction per order tried: about 4.5·W·H bytes each (5 MB at 1024²,
+  /// 300 MB at 8192²).
+  int width = 1024;
+  int height = 1024;  ///< see width
   /// Minimum number of empty texels between two charts and between a chart and the texture
   /// border, measured on the W×H grid with conservative rasterization (every texel a
   /// triangle touches is the chart's) and a square neighbourhood (diagonals count).
