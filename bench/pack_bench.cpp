@@ -7,8 +7,10 @@
 //     --size N | --width N --height N   target texture (1024×1024)
 //     --gutter N      gutter in texels (2)
 //     --rotations N   orientations per chart (16)
-//     --no-holes      disable hole filling (plain §6 four-horizon Tetris)
+//     --no-holes      disable hole filling
 //     --one-order     pack only in decreasing-area order
+//     --growth W      growth weight of side insertions (0.5)
+//     --paper         the paper's scheme alone: --no-holes --one-order --growth 0
 //     --tiny N        pack N random triangles, each its own chart, instead of atlases
 //     --threads N     TBB threads (0 = default)
 //     --dump PREFIX   write each packed atlas to PREFIX<name>.ppm
@@ -205,6 +207,12 @@ int main(int argc, char** argv) {
     else if (a == "--threads") threads = next();
     else if (a == "--no-holes") options.fill_holes = false;
     else if (a == "--one-order") options.try_orders = false;
+    else if (a == "--growth" && i + 1 < argc) options.growth_weight = std::atof(argv[++i]);
+    else if (a == "--paper") {
+      options.fill_holes = false;
+      options.try_orders = false;
+      options.growth_weight = 0;
+    }
     else if (a == "--check") check = true;
     else if (a == "--tiny") tiny = next();
     else if (a == "--dump" && i + 1 < argc) dump = argv[++i];

@@ -1,3 +1,12 @@
+// Chart packing (Iso-charts §6). The driver: validate and normalize the charts, then search
+// the texel scale; at each scale every chart is rasterized in every rotation and the charts
+// are packed greedily, one order per task (pack_once). The canvas (pack_canvas.h) holds the
+// packing, its four horizons and the searches; the rasters come from pack_raster.h.
+//
+// Determinism: each packing is sequential over charts; the parallel parts (rasterizing,
+// evaluating rotations and blocks of positions, the orders) write to their own slots or
+// reduce with a total order, so the result is the same for any number of threads.
+
 #include "isochart/pack.h"
 
 #include <algorithm>
@@ -27,10 +36,6 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 // The scale search gives up (the charts cannot fit at any scale) after this many attempts.
 constexpr int kMaxAttempts = 60;
-// Weight of the growth of the aspect-corrected bounding area against wasted texels when a
-// chart is introduced from a side. 0 is the paper's rule (least waste only); measured on the
-// baseline atlases, 0.5 keeps the packing closer to the target shape and packs tighter.
-constexpr double kGrowthWeight = 0.5;
 
 // A chart in the packer's own frame: centred, scaled so its UV area equals its 3-D area.
 struct Prepared {
@@ -140,7 +145,7 @@ std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int 
 Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations,
                   const std::vector<int>& order, int limit_w, int limit_h, int gutter,
                   const PackOptions& options, double area_texels) {
-  Canvas canvas(limit_w, limit_h, gutter, kGrowthWeight);
+  Canvas canvas(limit_w, limit_h, gutter, options.growth_weight);
   Attempt attempt;
   attempt.placed.resize(rasters.size() / rotations);
   const double aspect = static_cast<double>(limit_w) / limit_h;
@@ -214,6 +219,8 @@ void validate(const PackOptions& o) {
         std::to_string(o.width) + "x" + std::to_string(o.height) + " texture");
   if (o.rotations < 1 || o.rotations > 360)
     bad("pack: rotations " + std::to_string(o.rotations) + " is outside 1..360");
+  if (!(o.growth_weight >= 0) || !std::isfinite(o.growth_weight))
+    bad("pack: growth_weight " + std::to_string(o.growth_weight) + " must be finite and >= 0");
   if (!(o.scale_tolerance > 0 && o.scale_tolerance < 1))
     bad("pack: scale_tolerance " + std::to_string(o.scale_tolerance) + " is outside (0, 1)");
 }
@@ -325,7 +332,7 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
   result.used_width = box.w;
   result.used_height = box.h;
   result.attempts = attempts;
-  result.by_height = best_order == 1;
+  result.by_length = best_order == 1;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   report(progress, Stage::Packing, 1);
   return result;

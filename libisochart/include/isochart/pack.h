@@ -41,6 +41,11 @@ struct PackOptions {
   /// (a hole left by earlier charts, or the open space above a horizon), touching as much
   /// of its neighbourhood as possible.
   bool fill_holes = true;
+  /// Extension beyond §6: when a chart is introduced from a side, its cost is the wasted
+  /// texels plus this weight times the growth of the area of the smallest W:H rectangle
+  /// around the packing. 0 is the paper's rule (least waste only); a positive weight keeps
+  /// the packing near the target shape.
+  double growth_weight = 0.5;
   /// Extension beyond §6: pack in two orders, decreasing area (the paper) and decreasing
   /// bounding-rectangle length, at every scale tried, and keep the better packing.
   bool try_orders = true;
@@ -59,12 +64,12 @@ struct ChartPlacement {
 struct PackResult {
   double packing_ratio = 0;  ///< Σ chart UV area / area of the UV bounding box of all charts
   double utilization = 0;    ///< Σ chart UV area / area of [0,1]² (texture coverage)
-  double texel_size = 0;     ///< surface length per texel, the same for all charts
+  double texel_size = 0;     ///< surface length per texel (units of √area_3d), all charts
   double seconds = 0;        ///< wall time of pack_charts
   int used_width = 0;        ///< texels spanned by the charts' conservative raster in x
   int used_height = 0;       ///< same in y
-  int attempts = 0;          ///< packings tried by the scale search (per order)
-  bool by_height = false;    ///< the kept packing used the decreasing-length order
+  int attempts = 0;          ///< scales tried by the search (each packs every order)
+  bool by_length = false;    ///< the kept packing used the decreasing-length order
   std::vector<ChartPlacement> placements;  ///< per input chart
 };
 
@@ -73,13 +78,23 @@ struct PackResult {
 /// W×H grid, no chart comes closer than `gutter` texels to the border, and the packing is as
 /// large as it can be while fitting the texture (the scale is searched).
 ///
-/// Steps: (1) scale each chart so its UV area equals its 3-D area; (2) sort by decreasing
-/// area; (3) for each chart, pick the direction pair by W_expect = H_curr·W/H (left/right
-/// when W_expect > W_curr, else top/bottom) and insert it from the side and in the rotation
-/// that waste the least space between the chart's horizon and the packing's horizon, as
-/// tracked by the four horizons. Charts are placed on a raster at the final texel size, so
-/// the gutter is exact. Extensions (see PackOptions): pre-rotation to the minimal-area
-/// bounding rectangle, filling holes inside the packing, a second order, a final compaction.
+/// The paper's steps: (1) scale each chart so its UV area equals its 3-D area; (2) sort by
+/// decreasing area; (3) for each chart, pick the direction pair by W_expect = H_curr·W/H
+/// (left/right when W_expect > W_curr, else top/bottom) and introduce the chart from the
+/// side of that pair, at the offset and in the rotation that waste the least space between
+/// the chart's horizon and the packing's horizon (the four horizons: top, bottom, left and
+/// right of the evolving packing). Charts are rasterized conservatively at the final texel
+/// size and placed on that grid, so the gutter is exact; the texel size is searched
+/// (bisection) for the largest packing that fits the W×H texture.
+///
+/// Additions, measured on the baseline atlases (see bench/pack_bench.cpp):
+/// - rotations start from each chart's minimal-area bounding rectangle;
+/// - before growing the packing from a side, a chart goes to the free position inside the
+///   current bounding box (a hole between charts, or open space above a horizon) whose
+///   outline touches the most placed charts, if any (`fill_holes`);
+/// - side insertions also pay for growing the W:H rectangle around the packing
+///   (`growth_weight`);
+/// - a second order, by decreasing length of the minimal rectangle (`try_orders`).
 ///
 /// Deterministic, and identical for any number of TBB threads.
 /// \throw InputError for invalid options or charts (empty, index out of range, NaN,
