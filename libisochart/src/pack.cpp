@@ -142,15 +142,19 @@ std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int 
 }
 
 // One packing of all charts at the rasters' scale, in the given order (§6 step 3).
+// `tick(k)` is called every few charts with the number placed so far.
+template <class Tick>
 Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations,
                   const std::vector<int>& order, int limit_w, int limit_h, int gutter,
-                  const PackOptions& options, double area_texels) {
+                  const PackOptions& options, double area_texels, const Tick& tick) {
   Canvas canvas(limit_w, limit_h, gutter, options.growth_weight);
   Attempt attempt;
   attempt.placed.resize(rasters.size() / rotations);
   const double aspect = static_cast<double>(limit_w) / limit_h;
   std::vector<Candidate> candidates(2 * rotations);
-  for (const int chart : order) {
+  for (std::size_t step = 0; step < order.size(); ++step) {
+    if (step % 32 == 31) tick(step);
+    const int chart = order[step];
     const ChartRaster* r = &rasters[static_cast<std::size_t>(chart) * rotations];
     Candidate chosen;
     if (canvas.empty()) {
@@ -264,13 +268,17 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
       throw InputError("", "pack: the " + std::to_string(n) + " charts do not fit a " +
                                std::to_string(options.width) + "x" + std::to_string(options.height) +
                                " texture with a gutter of " + std::to_string(g) + " texels");
-    report(progress, Stage::Packing, std::min(0.95, attempts / 12.0));
+    report(progress, Stage::Packing, std::min(0.95, attempts / 10.0));
     ++attempts;
     const std::vector<ChartRaster> rasters = rasterize_all(prepared, rotations, scale, limit_w, limit_h);
     const double area_texels = total_area * scale * scale;
     std::vector<Attempt> tries(orders.size());
+    // Progress: about ten attempts are typical; within one, the share of charts placed.
+    const auto tick = [&](std::size_t done) {
+      report(progress, Stage::Packing, std::min(0.95, (attempts - 1 + static_cast<double>(done) / n) / 10));
+    };
     tbb::parallel_for(0, static_cast<int>(orders.size()), [&](int o) {
-      tries[o] = pack_once(rasters, rotations, orders[o], limit_w, limit_h, g, options, area_texels);
+      tries[o] = pack_once(rasters, rotations, orders[o], limit_w, limit_h, g, options, area_texels, tick);
     });
     int ok = -1;
     double placed = 0;

@@ -4,6 +4,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -477,4 +478,10 @@ TEST_CASE("no charts is a no-op, and the progress callback can cancel", "[pack]"
     return ++calls < 2;
   };
   CHECK_THROWS_AS(pack_charts(charts, {}, stop), Cancelled);
+  // Cancelling from inside a packing attempt (reported from TBB tasks) also stops it.
+  std::vector<PackChart> many = blobs(100, 8);
+  std::atomic<int> count{0};
+  const Progress stop_later = [&](Stage, double) { return ++count < 4; };
+  CHECK_THROWS_AS(pack_charts(many, {}, stop_later), Cancelled);
+  CHECK(count >= 4);
 }
