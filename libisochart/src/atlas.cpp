@@ -81,6 +81,14 @@ class Builder {
     param_.max_l2 = o.max_l2;
     param_.max_linf = o.max_linf;
     param_.optimize_passes = o.optimize_passes;
+    component_vertices_.assign(topo_.num_components(), 0);
+    std::vector<int> seen(mesh.num_vertices(), 0);
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      for (int v : mesh.faces[f])
+        if (!seen[v]) {
+          seen[v] = 1;
+          ++component_vertices_[topo_.face_components()[f]];
+        }
   }
 
   Atlas run() {
@@ -173,9 +181,8 @@ class Builder {
     Outcome out;
     const std::vector<int>& faces = work.faces;
     detail::ChartGeometry g = detail::make_chart(mesh_, faces);
-    // Faces meeting only at a vertex would make a pinched chart: give each fan its own copy.
-    detail::cut_along_edges(g, std::vector<char>(Topology(g.tris, g.num_vertices()).num_edges(), 0));
-    const Topology topo(g.tris, g.num_vertices());
+    // Faces meeting only at a vertex would make a pinched chart: each fan gets its own copy.
+    const Topology topo = detail::chart_topology(g);
     if (topo.num_components() > 1) {
       out.components_only = true;
       out.parts.resize(topo.num_components());
@@ -190,9 +197,9 @@ class Builder {
       out.chart.geometry = std::move(g);
       return out;
     }
-    Embedding emb = embed(g, out.times);
+    Embedding emb = embed(g, out.times, landmarks_for(g, faces));
     const bool disk_like = topo.genus() == 0 && !topo.boundary_loops().empty();
-    if (disk_like && !force_split && try_accept(g, detail::isomap_uv(emb), po, out)) return out;
+    if (disk_like && !force_split && try_accept(g, topo, detail::isomap_uv(emb), po, out)) return out;
     // Split (§5).
     auto t0 = Clock::now();
     detail::SplitKind kind;
@@ -225,12 +232,20 @@ class Builder {
     return out;
   }
 
-  Embedding embed(const detail::ChartGeometry& g, StageTimes& t) const {
+  // Landmarks for chart g (with parent faces `faces`): the full count for a whole component,
+  // in proportion to the chart's share of its component's vertices below that, at least 25.
+  int landmarks_for(const detail::ChartGeometry& g, const std::vector<int>& faces) const {
+    const int component = component_vertices_[topo_.face_components()[faces.front()]];
+    const double share = component > 0 ? static_cast<double>(g.num_vertices()) / component : 1.0;
+    return std::clamp(static_cast<int>(o_.landmarks * share), std::min(25, o_.landmarks), o_.landmarks);
+  }
+
+  Embedding embed(const detail::ChartGeometry& g, StageTimes& t, int landmarks) const {
     auto t0 = Clock::now();
     const GeodesicSolver solver(g.positions, g.tris);
     t.geodesics += since(t0);
     EmbeddingOptions eo;
-    eo.landmarks = o_.landmarks;
+    eo.landmarks = landmarks;
     t0 = Clock::now();
     Embedding e = landmark_isomap(solver, eo);
     t.embedding += since(t0);
@@ -334,8 +349,7 @@ class Builder {
     faces.insert(faces.end(), b.geometry.faces.begin(), b.geometry.faces.end());
     std::sort(faces.begin(), faces.end());
     detail::ChartGeometry g = detail::make_chart(mesh_, faces);
-    detail::cut_along_edges(g, std::vector<char>(Topology(g.tris, g.num_vertices()).num_edges(), 0));
-    const Topology topo(g.tris, g.num_vertices());
+    const Topology topo = detail::chart_topology(g);
     if (topo.num_components() != 1 || topo.genus() != 0 || topo.boundary_loops().empty()) return out;
 
     // Texture coordinate of each parent vertex in either chart (first copy wins).
@@ -382,27 +396,27 @@ class Builder {
     }
     detail::ParamOptions po = param_;
     po.seed = chart_seed(faces);
-    po.lscm_fallback = false;  // the aligned union is the start worth trying
-    try_accept(g, start_uncut, po, out);
+    try_accept(g, topo, start_uncut, po, out);
     return out;
   }
 
   // Parameterizes a genus-0 chart with boundary and accepts it into `out` if it meets the
   // bounds. Several boundary loops are slit into one first; the slit has zero width, so the
   // uncut chart's embedding is a valid start for the slit chart too.
-  bool try_accept(const detail::ChartGeometry& g, const std::vector<Vec2d>& start_uv,
+  bool try_accept(const detail::ChartGeometry& g, const Topology& topo, const std::vector<Vec2d>& start_uv,
                   const detail::ParamOptions& po, Outcome& out) const {
     detail::ChartGeometry cg = g;
     std::vector<int> origin;
-    if (!detail::cut_to_disk(cg, &origin)) return false;
+    if (!detail::cut_to_disk(cg, &origin, &topo)) return false;
     std::vector<Vec2d> start;
     if (!start_uv.empty()) {
       for (int v : origin) start.push_back(start_uv[v]);
       detail::open_slits(cg, origin, start);
       // A tube (two boundary loops, slit lengthwise): the uncut embedding flattens it onto
       // itself. Geodesics on the slit chart go around the slit, so its own embedding unrolls it.
-      const bool tube = Topology(g.tris, g.num_vertices()).boundary_loops().size() == 2;
-      if (tube && flipped_fraction(cg, start) > 0.25) start = detail::isomap_uv(embed(cg, out.times));
+      const bool tube = topo.boundary_loops().size() == 2;
+      if (tube && flipped_fraction(cg, start) > 0.25)
+        start = detail::isomap_uv(embed(cg, out.times, landmarks_for(cg, g.faces)));
     }
     detail::ChartParam p = detail::parameterize(cg, start, po);
     out.times.optimization += p.optimize_seconds;
@@ -442,6 +456,7 @@ class Builder {
   const AtlasOptions& o_;
   const Progress& progress_;
   Topology topo_;
+  std::vector<int> component_vertices_;  // referenced vertices per mesh component
   detail::SplitOptions split_;
   detail::ParamOptions param_;
   StageTimes times_;

@@ -38,8 +38,10 @@ ChartGeometry make_chart(const Mesh& mesh, const std::vector<int>& faces) {
   return g;
 }
 
-void cut_along_edges(ChartGeometry& g, const std::vector<char>& cut_edge, std::vector<int>* origin) {
-  const Topology topo(g.tris, g.num_vertices());
+void cut_along_edges(ChartGeometry& g, const std::vector<char>& cut_edge, std::vector<int>* origin,
+                     const Topology* given) {
+  const Topology own = given ? Topology() : Topology(g.tris, g.num_vertices());
+  const Topology& topo = given ? *given : own;
   const int nv = g.num_vertices();
   if (origin && origin->empty()) {
     origin->resize(nv);
@@ -86,8 +88,16 @@ void cut_along_edges(ChartGeometry& g, const std::vector<char>& cut_edge, std::v
   }
 }
 
-bool cut_to_disk(ChartGeometry& g, std::vector<int>* origin) {
-  const Topology topo(g.tris, g.num_vertices());
+Topology chart_topology(ChartGeometry& g) {
+  Topology t(g.tris, g.num_vertices());
+  if (t.nonmanifold_vertices().empty()) return t;
+  cut_along_edges(g, std::vector<char>(t.num_edges(), 0), nullptr, &t);
+  return Topology(g.tris, g.num_vertices());
+}
+
+bool cut_to_disk(ChartGeometry& g, std::vector<int>* origin, const Topology* given) {
+  const Topology own = given ? Topology() : Topology(g.tris, g.num_vertices());
+  const Topology& topo = given ? *given : own;
   const auto& loops = topo.boundary_loops();
   if (origin) {
     origin->resize(g.num_vertices());
@@ -147,7 +157,7 @@ bool cut_to_disk(ChartGeometry& g, std::vector<int>* origin) {
       in_tree[v] = in_tree[pred[v]] = 1;
     }
   }
-  cut_along_edges(g, cut, origin);
+  cut_along_edges(g, cut, origin, &topo);
   const Topology after(g.tris, g.num_vertices());
   return after.boundary_loops().size() == 1 && after.num_components() == 1;
 }

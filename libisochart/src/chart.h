@@ -29,7 +29,8 @@ ChartGeometry make_chart(const Mesh& mesh, const std::vector<int>& faces);
 /// edge paths that join every loop to the first one (the chart keeps one piece; UVAtlas's
 /// "make the chart simple" step). Returns false when the chart is not genus 0 with ≥ 1 loop.
 /// `origin` (if given) receives, for every vertex after the cut, the vertex it was copied from.
-bool cut_to_disk(ChartGeometry& g, std::vector<int>* origin = nullptr);
+/// `topo` may pass g's current topology to save rebuilding it.
+bool cut_to_disk(ChartGeometry& g, std::vector<int>* origin = nullptr, const Topology* topo = nullptr);
 
 /// Opens zero-width slits in a start parameterization of a cut chart: every vertex sharing its
 /// origin with another moves slightly into its own triangles, so the boundary starts simple.
@@ -37,7 +38,11 @@ void open_slits(const ChartGeometry& g, const std::vector<int>& origin, std::vec
 
 /// Duplicates vertices along the marked edges (a flag per Topology edge id of g) so the mesh
 /// opens there; vertices whose faces form several fans are split too. `origin` as above.
-void cut_along_edges(ChartGeometry& g, const std::vector<char>& cut_edge, std::vector<int>* origin = nullptr);
+void cut_along_edges(ChartGeometry& g, const std::vector<char>& cut_edge, std::vector<int>* origin = nullptr,
+                     const Topology* topo = nullptr);
+
+/// g's topology, after giving each fan of a pinched (non-manifold) vertex its own copy.
+Topology chart_topology(ChartGeometry& g);
 
 struct ParamOptions {
   double max_l2 = 1.1;
