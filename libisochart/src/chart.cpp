@@ -363,6 +363,7 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
   opt.seed = o.seed;
   // §6: only vertices whose 1-ring exceeds the user's limit are optimized.
   opt.vertex_l2_threshold = o.max_l2;
+  opt.give_up_l2 = o.max_l2;
   double seconds = 0;
   auto attempt = [&](std::vector<Vec2d> uv, const char* method) {
     ChartParam p;
