@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
   cli::add_info(app, ctx, action);
   cli::add_stats(app, ctx, action);
   cli::add_render(app, ctx, action);
+  cli::add_atlas(app, ctx, action);
+  cli::add_remesh(app, ctx, action);
   cli::add_psnr(app, ctx, action);
 
   try {

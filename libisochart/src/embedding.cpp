@@ -255,7 +255,14 @@ Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& 
   Eigen::MatrixXd b(q, q);
   for (int i = 0; i < q; ++i)
     for (int j = 0; j < q; ++j) b(i, j) = -0.5 * (d2(i, j) - row_mean[i] - row_mean[j] + total_mean);
-  e.eigenvalue_sum = b.trace();
+  // The energy shares of §5.1/§5.3 are taken over the positive spectrum: geodesic distances are
+  // not Euclidean, so B has negative eigenvalues too, and with them in the sum (the trace) the
+  // top three would claim about 100% of the energy of nearly any shape.
+  {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> all(b, Eigen::EigenvaluesOnly);
+    e.eigenvalue_sum = 0;
+    for (int i = 0; i < q; ++i) e.eigenvalue_sum += std::max(all.eigenvalues()[i], 0.0);
+  }
   e.mean_squared_distances.assign(row_mean.data(), row_mean.data() + q);
 
   const int nev = std::min(options.max_dimensions, q);

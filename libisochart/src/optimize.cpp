@@ -80,8 +80,11 @@ class Optimizer {
 
   bool valid() const { return valid_; }
 
+  double current_l2() const { return area3_ > 0 ? std::sqrt(s1_ * s2_) / area3_ : 0.0; }
+
   OptimizeResult run() {
     OptimizeResult r;
+    double last_l2 = current_l2();
     for (int pass = 0; pass < o_.passes && valid_; ++pass) {
       // Worst vertices first (§6).
       std::vector<std::pair<double, int>> order;
@@ -100,6 +103,15 @@ class Optimizer {
       ++r.sweeps;
       recompute_sums();  // keep the running sums free of drift
       if (moved == 0) break;
+      // Gains shrink from sweep to sweep: a chart that would still miss the bound with the
+      // last gain repeated every remaining sweep is rejected whatever happens next.
+      const double l2 = current_l2();
+      const int remaining = o_.passes - pass - 1;
+      if (o_.give_up_l2 > 0 && remaining > 0 && l2 - remaining * std::max(last_l2 - l2, 0.0) > o_.give_up_l2) {
+        r.gave_up = true;
+        break;
+      }
+      last_l2 = l2;
     }
     return r;
   }
@@ -497,6 +509,7 @@ OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::
     const OptimizeResult run = opt.run();
     r.moves = run.moves;
     r.sweeps = run.sweeps;
+    r.gave_up = run.gave_up;
   }
   r.after = measure_stretch(positions, faces, uv);
   return r;

@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "isochart/error.h"
+#include "isochart/pack.h"
 #include "isochart/stretch.h"
 #include "union_find.h"
 
@@ -484,7 +485,27 @@ Placement place_charts(const AtlasCharts& a, const LevelOptions& o, const isocha
   pl.mirrored.assign(nc, 0);
   isochart::report(progress, isochart::Stage::Packing, 0.0);
   if (o.repack) {
-    throw Error("re-packing needs isochart::pack_charts, which is not available yet");
+    // The same packer for every atlas, ours or external: all charts at one texel density,
+    // `gutter` texels apart. Mirrored charts are unmirrored first (the packer only rotates).
+    std::vector<isochart::PackChart> pack(nc);
+    for (int c = 0; c < nc; ++c) {
+      const Chart& ch = a.charts[c];
+      pack[c].uv = ch.uv;
+      if (ch.area_uv < 0)
+        for (Vec2d& uv : pack[c].uv) uv.x = -uv.x;
+      pack[c].faces = ch.local_faces;
+      pack[c].area_3d = ch.area_3d;
+    }
+    isochart::PackOptions po;
+    po.width = o.width;
+    po.height = o.height;
+    po.gutter = o.gutter;
+    isochart::pack_charts(pack, po, progress);
+    for (int c = 0; c < nc; ++c) {
+      pl.texel[c].resize(pack[c].uv.size());
+      for (std::size_t i = 0; i < pack[c].uv.size(); ++i)
+        pl.texel[c][i] = {pack[c].uv[i].x * o.width, pack[c].uv[i].y * o.height};
+    }
   } else {
     const double tol = 1e-9;
     for (int c = 0; c < nc; ++c) {

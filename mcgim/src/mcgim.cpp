@@ -24,6 +24,9 @@ void check_options(const LevelOptions& o) {
   if (o.width < 2 || o.width > 16384 || o.height < 2 || o.height > 16384)
     bad("geometry image size " + std::to_string(o.width) + "x" + std::to_string(o.height) +
         " is outside 2..16384");
+  if (o.repack && (o.width > 8192 || o.height > 8192))
+    bad("geometry image size " + std::to_string(o.width) + "x" + std::to_string(o.height) +
+        " is beyond 8192, the largest texture the packer handles");
   if (o.gutter < 1) bad("the gutter must be at least 1 texel");
   if (o.optimize_iterations < 0) bad("optimize_iterations must be >= 0");
   if (o.geometric_iterations < 0) bad("geometric_iterations must be >= 0");

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <set>
 
+#include "isochart/builtin.h"
 #include "isochart/error.h"
 #include "isochart/geo_test_meshes.h"
 
@@ -281,4 +282,17 @@ TEST_CASE("tiny charts embed exactly", "[embedding]") {
         CHECK(std::sqrt(y) == Approx(norm(p[a] - p[b])).epsilon(1e-6));
       }
   }
+}
+
+TEST_CASE("a shape with many appendages spreads its energy beyond three eigenvalues", "[embedding]") {
+  // §5.1: the general clustering case. The energy is the positive spectrum: with the trace
+  // (negative eigenvalues included) as the total, nearly every shape would pass 90%.
+  const Embedding e = landmark_isomap(GeodesicSolver(make_builtin("creature")));
+  REQUIRE(e.dimensions >= 4);
+  double top = 0;
+  for (double l : e.eigenvalues) top += l;
+  CHECK(e.eigenvalue_sum >= top * (1 - 1e-12));
+  const double top3 = (e.eigenvalues[0] + e.eigenvalues[1] + e.eigenvalues[2]) / e.eigenvalue_sum;
+  INFO("top-3 share " << top3);
+  CHECK(top3 < 0.9);
 }

@@ -47,3 +47,30 @@ TEST_CASE("isocharts psnr reports distances and rejects bad input", "[mcgim][cli
   CHECK(run("psnr builtin:sphere " + (run.dir / "missing.off").string()) == 2);
   CHECK(run("psnr builtin:sphere builtin:sphere --samples 0") == 2);
 }
+
+TEST_CASE("isocharts remesh writes watertight levels and reports them", "[mcgim][cli]") {
+  const CliRun run("remesh_test");
+  const std::string out = (run.dir / "sphere.ply").string(), pre = (run.dir / "gim").string();
+  REQUIRE(run("remesh builtin:sphere -o " + out + " --levels 64,32 --psnr-samples 20000 --png " + pre + " --exr " + pre +
+              " --json") == 0);
+  const nlohmann::json j = run.json();
+  REQUIRE(j["levels"].size() == 2);
+  for (const auto& lv : j["levels"]) {
+    CHECK(lv["closed"].get<bool>());
+    CHECK(lv["manifold"].get<bool>());
+    CHECK(lv["euler_preserved"].get<bool>());
+    CHECK(lv["psnr"].get<double>() > 30.0);
+    CHECK(lv["defined_samples"].get<long long>() >= lv["unique_vertices"].get<long long>());
+  }
+  CHECK(j["levels"][0]["resolution"][0] == 64);
+  CHECK(j["levels"][1]["correspondence_samples"] == 0);
+  CHECK(fs::exists(out));
+  CHECK(fs::exists(run.dir / "sphere_32.ply"));
+  CHECK(fs::exists(pre + "_64x64.exr"));
+  CHECK(fs::exists(pre + "_32x32.png"));
+  // Bad input exits with 2: exclusive sizes, a bad output extension, an atlas without UVs.
+  CHECK(run("remesh builtin:sphere -o " + out + " --res 64 --samples 1000") == 2);
+  CHECK(run("remesh builtin:sphere -o " + (run.dir / "x.xyz").string()) == 2);
+  CHECK(run("remesh builtin:sphere -o " + out + " --atlas builtin:torus") == 2);
+  CHECK(run("remesh builtin:sphere -o " + out + " --res 1") == 2);
+}

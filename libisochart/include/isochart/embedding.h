@@ -42,8 +42,8 @@ struct Embedding {
   /// Descending: the positive ones among the top max_dimensions eigenvalues of B, where
   /// "positive" means above 1e-6·λ1, so that rounding noise on a flat chart adds no dimension.
   std::vector<double> eigenvalues;
-  /// Σ of all q eigenvalues of B (its trace, negative ones included), for the energy tests of
-  /// §5.1/§5.3.
+  /// Σ of the positive eigenvalues of B (all q of them, not only the top ones), the total energy
+  /// for the eigenvalue-share tests of §5.1/§5.3.
   double eigenvalue_sum = 0;
   int dimensions = 0;  ///< = eigenvalues.size()
   /// dimensions × q unit eigenvectors v_j of B, row per dimension, each with its

@@ -28,6 +28,9 @@ struct OptimizeOptions {
   double vertex_l2_threshold = 0.0;
   /// Fraction of the kernel segment used (keeps triangles away from degeneracy).
   double conservative = 0.8;
+  /// Stop early when the chart cannot reach this L2 stretch: after each sweep, the L2 reached
+  /// if every remaining sweep gained as much as the last one is compared with it. 0 = never.
+  double give_up_l2 = 0;
   std::uint64_t seed = 1;
 };
 
@@ -35,6 +38,7 @@ struct OptimizeResult {
   StretchStats before, after;
   long long moves = 0;   ///< accepted vertex moves
   int sweeps = 0;
+  bool gave_up = false;  ///< stopped because give_up_l2 was out of reach
 };
 
 /// Removes flipped triangles from a chart's parameterization, as far as local moves can: each

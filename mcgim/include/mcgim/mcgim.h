@@ -21,8 +21,8 @@
 namespace mcgim {
 
 struct LevelOptions {
-  int width = 256;   ///< samples per row (2 .. 16384)
-  int height = 256;  ///< rows (2 .. 16384)
+  int width = 256;   ///< samples per row (2 .. 16384; 8192 when re-packing)
+  int height = 256;  ///< rows (2 .. 16384; 8192 when re-packing)
   /// Re-pack the atlas's charts for this resolution with isochart::pack_charts (every chart
   /// at the same texel density, at least `gutter` empty texels between charts). When false,
   /// the atlas's own layout in [0,1]² is used as is and must keep charts ≥ 1 texel apart.

@@ -1,0 +1,250 @@
+// `isocharts remesh IN -o OUT.ply`: multi-chart geometry images of a mesh (one level or a
+// pyramid), the remesh of each level, its watertightness checks and its geometric PSNR.
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "cli.h"
+#include "isochart/atlas.h"
+#include "isochart/builtin.h"
+#include "isochart/error.h"
+#include "mcgim/image_io.h"
+#include "mcgim/mcgim.h"
+#include "mcgim/psnr.h"
+
+namespace cli {
+
+namespace {
+
+struct RemeshArgs {
+  std::string input;
+  std::string output;
+  std::string atlas;
+  int res = 0;
+  long long samples = 0;
+  int width = 0, height = 0;
+  std::vector<int> levels;
+  std::string exr, png;
+  bool no_optimize = false;
+  long long psnr_samples = 1'000'000;
+  bool no_psnr = false;
+};
+
+nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
+
+// "out.ply" + 128 -> "out_128.ply" (the finest level keeps the name as given).
+std::string level_path(const std::string& path, int w, int h, bool suffix) {
+  if (!suffix) return path;
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  const std::string tag = "_" + std::to_string(w) + (w == h ? "" : "x" + std::to_string(h));
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return path + tag;
+  return path.substr(0, dot) + tag + path.substr(dot);
+}
+
+std::string image_path(const std::string& prefix, int w, int h, const char* ext) {
+  return prefix + "_" + std::to_string(w) + "x" + std::to_string(h) + ext;
+}
+
+isochart::Mesh load_any(const Context& ctx, const std::string& path) {
+  const std::string prefix = "builtin:";
+  if (path.rfind(prefix, 0) == 0) return isochart::make_builtin(path.substr(prefix.size()));
+  return ctx.load(path).mesh;
+}
+
+void run_remesh(const Context& ctx, const RemeshArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const int modes = (a.res > 0) + (a.samples > 0) + (a.width > 0 || a.height > 0) + !a.levels.empty();
+  if (modes > 1) bad_option("--res, --samples, --width/--height and --levels are exclusive");
+  if ((a.width > 0) != (a.height > 0)) bad_option("--width and --height go together");
+  isochart::format_from_path(a.output);  // reject an unknown output extension before working
+
+  const isochart::Mesh input = load_any(ctx, a.input);
+  // The atlas: an external one, or the iso-chart atlas of the input.
+  nlohmann::json atlas_json;
+  isochart::Mesh atlas;
+  const auto ta = std::chrono::steady_clock::now();
+  if (!a.atlas.empty()) {
+    atlas = load_any(ctx, a.atlas);
+    if (!atlas.has_uvs())
+      throw isochart::InputError(a.atlas, "the atlas has no texture coordinates (vt)");
+    atlas_json["source"] = a.atlas;
+  } else {
+    isochart::AtlasOptions ao;
+    ao.seed = ctx.opts.seed;
+    const isochart::Atlas built = isochart::build_atlas(input, ao, ctx.progress());
+    atlas = built.apply_to(input);
+    atlas_json["source"] = "iso-charts";
+    atlas_json["charts"] = built.num_charts();
+    atlas_json["l2"] = built.stats.l2;
+    atlas_json["linf"] = built.stats.linf;
+  }
+  atlas_json["seconds"] = seconds_since(ta);
+  // The library reports atlas problems without a file name: they belong to the atlas's source.
+  const std::string atlas_file = a.atlas.empty() ? a.input : a.atlas;
+  auto for_atlas = [&](auto&& fn) {
+    try {
+      return fn();
+    } catch (const isochart::InputError& e) {
+      if (!e.file().empty()) throw;
+      throw isochart::InputError(atlas_file, e.what());
+    }
+  };
+
+  mcgim::LevelOptions lo;
+  lo.optimize = !a.no_optimize;
+  std::vector<std::array<int, 2>> sizes;
+  nlohmann::json search;
+  if (!a.levels.empty()) {
+    for (int r : a.levels) sizes.push_back({r, r});
+  } else if (a.samples > 0) {
+    const mcgim::ResolutionChoice rc =
+        for_atlas([&] { return mcgim::choose_resolution(atlas, a.samples, lo, ctx.progress()); });
+    sizes.push_back({rc.width, rc.height});
+    search["target_samples"] = a.samples;
+    search["resolution"] = {rc.width, rc.height};
+    search["covered_samples"] = rc.defined_samples;
+    search["trials"] = rc.trials;
+  } else if (a.width > 0) {
+    sizes.push_back({a.width, a.height});
+  } else {
+    const int r = a.res > 0 ? a.res : 256;
+    sizes.push_back({r, r});
+  }
+
+  std::vector<mcgim::Level> levels;
+  if (sizes.size() == 1) {
+    lo.width = sizes[0][0];
+    lo.height = sizes[0][1];
+    levels.push_back(for_atlas([&] { return mcgim::build_level(atlas, lo, ctx.progress()); }));
+  } else {
+    mcgim::PyramidOptions po;
+    po.sizes = sizes;
+    po.level = lo;
+    levels = for_atlas([&] { return mcgim::build_pyramid(atlas, po, ctx.progress()); });
+  }
+
+  nlohmann::json jl = nlohmann::json::array();
+  std::ostringstream t;
+  t << a.input << (a.atlas.empty() ? "" : " (atlas " + a.atlas + ")") << "\n";
+  for (std::size_t l = 0; l < levels.size(); ++l) {
+    const mcgim::Level& lv = levels[l];
+    const mcgim::LevelStats& s = lv.stats;
+    const std::string out = level_path(a.output, s.width, s.height, l > 0);
+    const auto tw = std::chrono::steady_clock::now();
+    isochart::save_mesh(lv.remesh.mesh, out);
+    if (!a.exr.empty()) mcgim::write_exr(lv.image, image_path(a.exr, s.width, s.height, ".exr"));
+    if (!a.png.empty()) mcgim::write_normal_preview(lv.image, image_path(a.png, s.width, s.height, ".png"));
+    const double seconds_output = seconds_since(tw);
+    mcgim::DistanceResult d;
+    if (!a.no_psnr) {
+      mcgim::DistanceOptions dopt;
+      dopt.samples = a.psnr_samples;
+      dopt.seed = ctx.opts.seed;
+      d = mcgim::measure_distance(atlas, lv.remesh.mesh, dopt, ctx.progress());
+    }
+    nlohmann::json j;
+    j["output"] = out;
+    j["resolution"] = {s.width, s.height};
+    j["charts"] = s.charts;
+    j["empty_charts"] = s.empty_charts;
+    j["defined_samples"] = s.defined_samples;
+    j["removed_samples"] = s.removed_samples;
+    j["forced_samples"] = s.forced_samples;
+    j["unique_vertices"] = s.unique_vertices;
+    j["triangles"] = s.triangles;
+    j["degenerate_triangles"] = s.degenerate_triangles;
+    j["collapsed_triangles"] = s.collapsed_triangles;
+    j["pocket_triangles"] = lv.remesh.pocket_faces;
+    j["cut_nodes"] = s.cut_nodes;
+    j["cut_paths"] = s.cut_paths;
+    j["closed"] = s.topology.closed();
+    j["edge_manifold"] = s.topology.edge_manifold();
+    j["manifold"] = s.topology.manifold();
+    j["boundary_loops"] = s.topology.boundary_loops;
+    j["input_boundary_loops"] = s.input_boundary_loops;
+    j["euler_characteristic"] = s.topology.euler_characteristic;
+    j["input_euler_characteristic"] = s.input_euler_characteristic;
+    j["euler_preserved"] = s.topology.euler_characteristic == s.input_euler_characteristic;
+    j["components"] = s.topology.components;
+    j["texel_size"] = s.texel_size;
+    if (!a.no_psnr) {
+      j["psnr"] = finite_or_null(d.psnr);
+      j["psnr_mean"] = finite_or_null(d.psnr_mean);
+      j["rms_ab"] = d.rms_ab;
+      j["rms_ba"] = d.rms_ba;
+      j["hausdorff"] = d.hausdorff;
+      j["distance_samples"] = a.psnr_samples;
+    }
+    j["correspondence_samples"] = lv.coarser.empty() ? 0 : s.defined_samples;
+    j["seconds"] = {{"charts", s.seconds_charts},
+                    {"packing", s.seconds_packing},
+                    {"sampling", s.seconds_sampling},
+                    {"zippering", s.seconds_zippering},
+                    {"reconstruction", s.seconds_reconstruction},
+                    {"optimization", s.seconds_optimization},
+                    {"correspondence", s.seconds_correspondence},
+                    {"distance", a.no_psnr ? 0.0 : d.seconds},
+                    {"output", seconds_output}};
+    jl.push_back(j);
+
+    t << "  " << s.width << "x" << s.height << ": " << s.defined_samples << " defined, " << s.unique_vertices
+      << " unique, " << s.triangles << " triangles (" << s.degenerate_triangles << " zero-area), "
+      << (s.topology.closed() ? "closed" : std::to_string(s.topology.boundary_loops) + " boundary loops") << ", "
+      << (s.topology.manifold() ? "manifold" : "NOT manifold") << ", euler " << s.topology.euler_characteristic
+      << (s.topology.euler_characteristic == s.input_euler_characteristic ? "" : " (input " + std::to_string(s.input_euler_characteristic) + ")");
+    if (!a.no_psnr) t << ", PSNR " << std::fixed << std::setprecision(2) << d.psnr << " dB" << std::defaultfloat;
+    t << " -> " << out << "\n";
+  }
+  nlohmann::json j;
+  j["input"] = a.input;
+  j["atlas"] = atlas_json;
+  if (!search.empty()) j["search"] = search;
+  j["levels"] = jl;
+  j["seed"] = ctx.opts.seed;
+  j["seconds"] = seconds_since(t0);
+  ctx.emit(j, t.str());
+}
+
+}  // namespace
+
+void add_remesh(CLI::App& app, Context& ctx, Action& action) {
+  auto args = std::make_shared<RemeshArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "remesh", "Multi-chart geometry images and their watertight remeshes (one level or a pyramid)");
+  sub->add_option("input", args->input, "Mesh file (OBJ/OFF/PLY/glTF) or builtin:NAME")->required();
+  sub->add_option("-o,--output", args->output, "Remesh of the finest level (.ply, .obj or .glb); "
+                                                "coarser levels get _RES before the extension")
+      ->required();
+  sub->add_option("--res", args->res, "Square image resolution (default 256)")->check(CLI::Range(2, 8192));
+  sub->add_option("--samples", args->samples, "Choose the square resolution giving about N defined samples")
+      ->check(CLI::Range(16LL, 268'435'456LL));
+  sub->add_option("--width", args->width, "Image width (with --height)")->check(CLI::Range(2, 8192));
+  sub->add_option("--height", args->height, "Image height (with --width)")->check(CLI::Range(2, 8192));
+  sub->add_option("--levels", args->levels, "Pyramid of square resolutions, e.g. 256,128,64,32")
+      ->delimiter(',')
+      ->check(CLI::Range(2, 8192));
+  sub->add_option("--atlas", args->atlas, "Use this atlas (a mesh with texture coordinates) instead of "
+                                          "building the iso-chart atlas of the input");
+  sub->add_option("--exr", args->exr, "Write each level as PREFIX_WxH.exr (float positions, normals, "
+                                      "defined mask, chart and group ids)");
+  sub->add_option("--png", args->png, "Write a normal-map preview of each level as PREFIX_WxH.png");
+  sub->add_flag("--no-optimize", args->no_optimize, "Keep the zippered sample positions (no fitting)");
+  sub->add_option("--psnr-samples", args->psnr_samples, "Points per surface for the PSNR (default 1000000)")
+      ->check(CLI::Range(1LL, 1'000'000'000LL));
+  sub->add_flag("--no-psnr", args->no_psnr, "Skip the distance measurement");
+  sub->footer(
+      "Each level is packed for its own resolution (gutter 1 texel), sampled, zippered and "
+      "reconstructed; in a pyramid every sample is linked to the next coarser level by normal "
+      "shooting. The PSNR compares the remesh with the atlas's surface.\n"
+      "Examples:\n"
+      "  isocharts remesh ../shared/data/meshes/horse.ply -o horse_gim.ply --samples 47000 --json\n"
+      "  isocharts remesh ../shared/data/meshes/bunny.obj -o bunny.ply --levels 256,128,64,32 --png bunny\n"
+      "  isocharts remesh ../shared/data/meshes/bunny.obj -o bunny_xatlas.ply --res 256 \\\n"
+      "      --atlas ../shared/data/baseline_atlases/bunny_xatlas.obj");
+  sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_remesh(ctx, *args); }; });
+}
+
+}  // namespace cli

@@ -1,0 +1,276 @@
+// Packing benchmark: re-packs the charts of existing atlases (the Microsoft UVAtlas and
+// xatlas baselines in ../shared/data/baseline_atlases) with isochart::pack_charts and
+// compares packing ratios. Each chart keeps its own UVs and gets its 3-D area, so the
+// packer sees realistic chart shapes.
+//
+//   pack_bench [options] [atlas.obj ...]     (default: all six baseline atlases)
+//     --size N | --width N --height N   target texture (1024×1024)
+//     --gutter N      gutter in texels (2)
+//     --rotations N   orientations per chart (16)
+//     --no-holes      disable hole filling
+//     --one-order     pack only in decreasing-area order
+//     --growth W      growth weight of side insertions (0.5)
+//     --paper         the paper's scheme alone: --no-holes --one-order --growth 0
+//     --tiny N        pack N random triangles, each its own chart, instead of atlases
+//     --threads N     TBB threads (0 = default)
+//     --dump PREFIX   write each packed atlas to PREFIX<name>.ppm
+//     --check         verify no overlaps, [0,1]² and winding after packing (the gutter
+//                     is verified exactly by tests/isochart/pack_test.cpp)
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdint>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <tbb/global_control.h>
+
+#include "isochart/error.h"
+#include "isochart/mesh.h"
+#include "isochart/pack.h"
+#include "isochart/stretch.h"
+
+using namespace isochart;
+
+namespace {
+
+// TEMPORARY: a minimal OBJ reader for v/vt/f, until load_mesh reads texture coordinates
+// (the full reader lands on main). Polygons are fan-triangulated; vn and the rest ignored.
+Mesh read_obj_with_uvs(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot open");
+  Mesh m;
+  std::string line;
+  auto index = [](const std::string& s, std::size_t count) {
+    const long v = std::stol(s);
+    return static_cast<int>(v < 0 ? static_cast<long>(count) + v : v - 1);
+  };
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    std::string tag;
+    ls >> tag;
+    if (tag == "v") {
+      Vec3d p;
+      ls >> p.x >> p.y >> p.z;
+      m.positions.push_back(p);
+    } else if (tag == "vt") {
+      Vec2d t;
+      ls >> t.x >> t.y;
+      m.uvs.push_back(t);
+    } else if (tag == "f") {
+      std::vector<int> v, t;
+      std::string corner;
+      while (ls >> corner) {
+        const std::size_t slash = corner.find('/');
+        v.push_back(index(corner.substr(0, slash), m.positions.size()));
+        if (slash == std::string::npos) throw InputError(path, "face without vt");
+        const std::size_t slash2 = corner.find('/', slash + 1);
+        t.push_back(index(corner.substr(slash + 1, slash2 - slash - 1), m.uvs.size()));
+      }
+      for (std::size_t k = 1; k + 1 < v.size(); ++k) {
+        m.faces.push_back({v[0], v[k], v[k + 1]});
+        m.face_uvs.push_back({t[0], t[k], t[k + 1]});
+      }
+    }
+  }
+  return m;
+}
+
+struct ChartSet {
+  std::vector<PackChart> charts;
+  double input_ratio = 0;  // Σ UV area / UV bounding box of the input atlas
+};
+
+// Splits an atlas into charts with their own UVs and 3-D areas. Charts whose UVs are
+// mirrored (UVAtlas writes v flipped) are mirrored back so every chart is counter-clockwise.
+ChartSet charts_of(const Mesh& m) {
+  ChartSet set;
+  int count = 0;
+  const std::vector<int> chart = uv_charts(m, count);
+  set.charts.resize(count);
+  std::vector<std::vector<int>> local(count);  // per chart: uv index → local vertex, lazily
+  std::vector<int> stamp(m.uvs.size(), -1), id(m.uvs.size(), -1);
+  double uv_area = 0;
+  Vec2d lo = m.uvs[m.face_uvs[0][0]], hi = lo;
+  for (int f = 0; f < m.num_faces(); ++f) {
+    PackChart& c = set.charts[chart[f]];
+    Face face;
+    for (int k = 0; k < 3; ++k) {
+      const int t = m.face_uvs[f][k];
+      if (stamp[t] != chart[f]) {
+        stamp[t] = chart[f];
+        id[t] = static_cast<int>(c.uv.size());
+        c.uv.push_back(m.uvs[t]);
+      }
+      face[k] = id[t];
+      lo = {std::min(lo.x, m.uvs[t].x), std::min(lo.y, m.uvs[t].y)};
+      hi = {std::max(hi.x, m.uvs[t].x), std::max(hi.y, m.uvs[t].y)};
+    }
+    c.faces.push_back(face);
+    const Vec3d& a = m.positions[m.faces[f][0]];
+    c.area_3d += triangle_area(a, m.positions[m.faces[f][1]], m.positions[m.faces[f][2]]);
+    uv_area += std::abs(signed_area(m.uvs[m.face_uvs[f][0]], m.uvs[m.face_uvs[f][1]],
+                                    m.uvs[m.face_uvs[f][2]]));
+  }
+  set.input_ratio = uv_area / ((hi.x - lo.x) * (hi.y - lo.y));
+  for (PackChart& c : set.charts) {
+    double signed_sum = 0;
+    for (const Face& f : c.faces) signed_sum += signed_area(c.uv[f[0]], c.uv[f[1]], c.uv[f[2]]);
+    if (signed_sum < 0)
+      for (Vec2d& p : c.uv) p.x = -p.x;
+  }
+  return set;
+}
+
+// N random triangles of similar size, each its own chart (a deterministic generator).
+ChartSet random_triangles(int count) {
+  ChartSet set;
+  std::uint64_t state = 0x9E3779B97F4A7C15ULL;
+  auto uniform = [&state]() {
+    state ^= state << 13;
+    state ^= state >> 7;
+    state ^= state << 17;
+    return static_cast<double>(state >> 11) / 9007199254740992.0;
+  };
+  for (int i = 0; i < count; ++i) {
+    PackChart c;
+    const Vec2d a{uniform(), uniform()}, b{a.x + 0.5 + uniform(), a.y + 0.3 * uniform()};
+    const Vec2d d{a.x + uniform(), a.y + 0.4 + uniform()};
+    c.uv = {a, b, d};
+    c.faces = {{0, 1, 2}};
+    c.area_3d = signed_area(a, b, d) * (0.5 + uniform());
+    set.charts.push_back(c);
+  }
+  set.input_ratio = 0;
+  return set;
+}
+
+// Writes the packed atlas as a binary PPM (one colour per chart, texel centres inside a
+// triangle), for looking at a packing.
+void dump_ppm(const std::vector<PackChart>& charts, int w, int h, const std::string& path) {
+  std::vector<unsigned char> img(static_cast<std::size_t>(w) * h * 3, 255);
+  for (std::size_t i = 0; i < charts.size(); ++i) {
+    const unsigned char col[3] = {static_cast<unsigned char>(40 + (i * 97) % 200),
+                                  static_cast<unsigned char>(40 + (i * 57) % 200),
+                                  static_cast<unsigned char>(40 + (i * 151) % 200)};
+    for (const Face& f : charts[i].faces) {
+      Vec2d p[3];
+      for (int k = 0; k < 3; ++k) p[k] = {charts[i].uv[f[k]].x * w, charts[i].uv[f[k]].y * h};
+      const int x0 = std::max(0, static_cast<int>(std::min({p[0].x, p[1].x, p[2].x})));
+      const int x1 = std::min(w - 1, static_cast<int>(std::max({p[0].x, p[1].x, p[2].x})));
+      const int y0 = std::max(0, static_cast<int>(std::min({p[0].y, p[1].y, p[2].y})));
+      const int y1 = std::min(h - 1, static_cast<int>(std::max({p[0].y, p[1].y, p[2].y})));
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const Vec2d q{x + 0.5, y + 0.5};
+          const double a = signed_area(p[0], p[1], q), b = signed_area(p[1], p[2], q),
+                       c = signed_area(p[2], p[0], q);
+          if ((a >= 0 && b >= 0 && c >= 0) || (a <= 0 && b <= 0 && c <= 0))
+            for (int k = 0; k < 3; ++k) img[(static_cast<std::size_t>(h - 1 - y) * w + x) * 3 + k] = col[k];
+        }
+    }
+  }
+  std::ofstream out(path, std::ios::binary);
+  out << "P6\n" << w << " " << h << "\n255\n";
+  out.write(reinterpret_cast<const char*>(img.data()), static_cast<std::streamsize>(img.size()));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  PackOptions options;
+  int threads = 0;
+  bool check = false;
+  std::string dump;
+  int tiny = 0;
+  std::vector<std::string> files;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto next = [&]() -> int {
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "pack_bench: %s needs a value\n", a.c_str());
+        std::exit(2);
+      }
+      return std::atoi(argv[++i]);
+    };
+    if (a == "--size") options.width = options.height = next();
+    else if (a == "--width") options.width = next();
+    else if (a == "--height") options.height = next();
+    else if (a == "--gutter") options.gutter = next();
+    else if (a == "--rotations") options.rotations = next();
+    else if (a == "--threads") threads = next();
+    else if (a == "--no-holes") options.fill_holes = false;
+    else if (a == "--one-order") options.try_orders = false;
+    else if (a == "--growth" && i + 1 < argc) options.growth_weight = std::atof(argv[++i]);
+    else if (a == "--paper") {
+      options.fill_holes = false;
+      options.try_orders = false;
+      options.growth_weight = 0;
+    }
+    else if (a == "--check") check = true;
+    else if (a == "--tiny") tiny = next();
+    else if (a == "--dump" && i + 1 < argc) dump = argv[++i];
+    else if (!a.empty() && a[0] == '-') {
+      std::fprintf(stderr, "pack_bench: unknown option %s\n", a.c_str());
+      return 2;
+    } else files.push_back(a);
+  }
+  if (tiny > 0) files.push_back("tiny:" + std::to_string(tiny));
+  if (files.empty())
+    for (const char* name : {"bunny_uvatlas", "horse_uvatlas", "gargoyle_uvatlas", "bunny_xatlas",
+                             "horse_xatlas", "gargoyle_xatlas"})
+      files.push_back(std::string(ISOCHARTS_SHARED_DATA) + "/baseline_atlases/" + name + ".obj");
+  std::unique_ptr<tbb::global_control> limit;
+  if (threads > 0)
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                  threads);
+
+  std::printf("%-22s %6s %9s %9s %8s %9s %8s %s\n", "atlas", "charts", "theirs", "ours",
+              "util", "seconds", "tries", check ? "check" : "");
+  try {
+    for (const std::string& file : files) {
+      ChartSet set = file.rfind("tiny:", 0) == 0 ? random_triangles(tiny) : charts_of(read_obj_with_uvs(file));
+      const PackResult r = pack_charts(set.charts, options);
+      std::string verdict;
+      if (check) {
+        std::vector<std::array<Vec2d, 3>> tris;
+        std::vector<int> owner;
+        bool inside = true, ccw = true;
+        for (const PackChart& c : set.charts) {
+          owner.insert(owner.end(), c.faces.size(), static_cast<int>(&c - set.charts.data()));
+          for (const Vec2d& p : c.uv) inside = inside && p.x >= 0 && p.x <= 1 && p.y >= 0 && p.y <= 1;
+          for (const Face& f : c.faces) {
+            tris.push_back({c.uv[f[0]], c.uv[f[1]], c.uv[f[2]]});
+            // Input charts were made counter-clockwise overall; the packer must keep that.
+          }
+          double signed_sum = 0;
+          for (const Face& f : c.faces) signed_sum += signed_area(c.uv[f[0]], c.uv[f[1]], c.uv[f[2]]);
+          ccw = ccw && signed_sum > 0;
+        }
+        // Only pairs from different charts count: some input charts overlap themselves, and
+        // packing (a rigid motion per chart) neither causes nor repairs that.
+        std::size_t overlaps = 0;
+        for (const auto& [a, b] : overlapping_uv_pairs(tris)) overlaps += owner[a] != owner[b];
+        verdict = std::string(overlaps ? "OVERLAP" : "no-overlap") + (inside ? " in-[0,1]" : " OUTSIDE") +
+                  (ccw ? "" : " FLIPPED");
+      }
+      std::string name = file.substr(file.find_last_of('/') + 1);
+      if (!dump.empty())
+        dump_ppm(set.charts, options.width, options.height, dump + name.substr(0, name.size() - 4) + ".ppm");
+      std::printf("%-22s %6zu %9.3f %9.3f %8.3f %9.2f %8d %s\n", name.c_str(), set.charts.size(),
+                  set.input_ratio, r.packing_ratio, r.utilization, r.seconds, r.attempts,
+                  verdict.c_str());
+      std::fflush(stdout);
+    }
+  } catch (const Error& e) {
+    std::fprintf(stderr, "pack_bench: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

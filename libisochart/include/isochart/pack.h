@@ -1,0 +1,107 @@
+#pragma once
+/// Chart packing: lays out the charts of an atlas in [0,1]² for a W×H texture with a
+/// guaranteed gutter (Iso-charts §6, the four-horizon extension of the "Tetris" packer of
+/// Lévy et al. 2002).
+
+#include <vector>
+
+#include "isochart/mesh.h"
+#include "isochart/progress.h"
+#include "isochart/vec.h"
+
+namespace isochart {
+
+/// One chart to pack: a 2-D parameterization of a part of the surface.
+struct PackChart {
+  /// Per chart vertex; any position and scale. Faces should be counter-clockwise (the
+  /// packer only rotates and translates, so the winding it is given is the winding it returns).
+  std::vector<Vec2d> uv;
+  std::vector<Face> faces;  ///< chart-local vertex indices into `uv`
+  /// Surface area of the chart (units²). The packer scales the chart so that its UV area
+  /// equals this (§6 step 1), so all charts share one texel density. 0 means "unknown":
+  /// the chart's own UV area is used, i.e. the charts keep their relative UV scales.
+  double area_3d = 0;
+};
+
+struct PackOptions {
+  /// Target texture size in texels (1..8192 each). The packer works on a canvas of twice
+  /// that size in each direction per order tried: about 4.5·W·H bytes each (5 MB at 1024²,
+  /// 300 MB at 8192²).
+  int width = 1024;
+  int height = 1024;  ///< see width
+  /// Minimum number of empty texels between two charts and between a chart and the texture
+  /// border, measured on the W×H grid with conservative rasterization (every texel a
+  /// triangle touches is the chart's) and a square neighbourhood (diagonals count).
+  int gutter = 2;
+  /// Orientations tried per chart, evenly spaced over 360° starting from the chart's
+  /// minimal-area bounding rectangle (16 in the paper). Rotations only, never mirroring.
+  int rotations = 16;
+  /// Extension beyond §6: before introducing a chart from one of the four sides (which
+  /// grows the packing), look for a place inside the current bounding box where it fits
+  /// (a hole left by earlier charts, or the open space above a horizon), touching as much
+  /// of its neighbourhood as possible.
+  bool fill_holes = true;
+  /// Extension beyond §6: when a chart is introduced from a side, its cost is the wasted
+  /// texels plus this weight times the growth of the area of the smallest W:H rectangle
+  /// around the packing. 0 is the paper's rule (least waste only); a positive weight keeps
+  /// the packing near the target shape.
+  double growth_weight = 0.5;
+  /// Extension beyond §6: pack in two orders, decreasing area (the paper) and decreasing
+  /// bounding-rectangle length, at every scale tried, and keep the better packing.
+  bool try_orders = true;
+  /// The scale search stops when the largest scale known to fit and the smallest known not
+  /// to fit differ by less than this factor.
+  double scale_tolerance = 0.005;
+};
+
+/// How one chart was moved: texel = scale · R(angle) · uv_in + offset, then uv = texel / (W, H).
+struct ChartPlacement {
+  double angle = 0;  ///< counter-clockwise rotation, radians
+  double scale = 0;  ///< texels per input UV unit
+  Vec2d offset;      ///< texels
+};
+
+struct PackResult {
+  double packing_ratio = 0;  ///< Σ chart UV area / area of the UV bounding box of all charts
+  double utilization = 0;    ///< Σ chart UV area / area of [0,1]² (texture coverage)
+  double texel_size = 0;     ///< surface length per texel (units of √area_3d), all charts
+  double seconds = 0;        ///< wall time of pack_charts
+  int used_width = 0;        ///< texels spanned by the charts' conservative raster in x
+  int used_height = 0;       ///< same in y
+  int attempts = 0;          ///< scales tried by the search (each packs every order)
+  bool by_length = false;    ///< the kept packing used the decreasing-length order
+  std::vector<ChartPlacement> placements;  ///< per input chart
+};
+
+/// Packs the charts in place (Iso-charts §6): rewrites every chart's `uv` into [0,1]² so that
+/// all charts share one texel density, no two charts come closer than `gutter` texels on the
+/// W×H grid, no chart comes closer than `gutter` texels to the border, and the packing is as
+/// large as it can be while fitting the texture (the scale is searched).
+///
+/// The paper's steps: (1) scale each chart so its UV area equals its 3-D area; (2) sort by
+/// decreasing area; (3) for each chart, pick the direction pair by W_expect = H_curr·W/H
+/// (left/right when W_expect > W_curr, else top/bottom) and introduce the chart from the
+/// side of that pair, at the offset and in the rotation that waste the least space between
+/// the chart's horizon and the packing's horizon (the four horizons: top, bottom, left and
+/// right of the evolving packing). Charts are rasterized conservatively at the final texel
+/// size and placed on that grid, so the gutter is exact; the texel size is searched
+/// (bisection) for the largest packing that fits the W×H texture.
+///
+/// Additions, measured on the baseline atlases (see bench/pack_bench.cpp):
+/// - rotations start from each chart's minimal-area bounding rectangle;
+/// - before growing the packing from a side, a chart goes to the free position inside the
+///   current bounding box (a hole between charts, or open space above a horizon) whose
+///   outline touches the most placed charts, if any (`fill_holes`);
+/// - side insertions also pay for growing the W:H rectangle around the packing
+///   (`growth_weight`);
+/// - a second order, by decreasing length of the minimal rectangle (`try_orders`).
+///
+/// Deterministic, and identical for any number of TBB threads.
+/// \throw InputError for invalid options or charts (empty, index out of range, NaN,
+///        zero UV area, negative area), naming the chart, and when the charts cannot fit
+///        the texture at any scale (too many charts for its size and gutter).
+/// \throw Cancelled when `progress` returns false.
+PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& options = {},
+                       const Progress& progress = {});
+
+}  // namespace isochart

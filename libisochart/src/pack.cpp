@@ -1,0 +1,349 @@
+// Chart packing (Iso-charts §6). The driver: validate and normalize the charts, then search
+// the texel scale; at each scale every chart is rasterized in every rotation and the charts
+// are packed greedily, one order per task (pack_once). The canvas (pack_canvas.h) holds the
+// packing, its four horizons and the searches; the rasters come from pack_raster.h.
+//
+// Determinism: each packing is sequential over charts; the parallel parts (rasterizing,
+// evaluating rotations and blocks of positions, the orders) write to their own slots or
+// reduce with a total order, so the result is the same for any number of threads.
+
+#include "isochart/pack.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
+
+#include "isochart/error.h"
+#include "pack_canvas.h"
+
+namespace isochart {
+
+using pack_detail::Candidate;
+using pack_detail::Canvas;
+using pack_detail::ChartRaster;
+using pack_detail::Rect;
+using pack_detail::Side;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+// The scale search gives up (the charts cannot fit at any scale) after this many attempts.
+constexpr int kMaxAttempts = 60;
+
+// A chart in the packer's own frame: centred, scaled so its UV area equals its 3-D area.
+struct Prepared {
+  std::vector<Vec2d> points;
+  const std::vector<Face>* faces = nullptr;
+  double area = 0;        // UV area after normalization
+  double base_angle = 0;  // turns the minimal-area rectangle axis-aligned
+  double length = 0;      // longer side of that rectangle
+  Vec2d centre;           // input UV centre
+  double scale_in = 1;    // normalized = (uv − centre) · scale_in
+  pack_detail::ChartOutline outline;
+};
+
+struct Placed {
+  int rotation = -1;
+  int x = 0, y = 0;
+  Vec2d origin;  // the raster origin of the chosen rotation
+};
+
+struct Attempt {
+  bool ok = false;
+  std::vector<Placed> placed;  // per chart
+  Rect box;
+  double ratio = 0;   // chart area / raster bounding box, to compare orders
+  double placed_fraction = 0;  // of the charts' texels, when the packing failed
+};
+
+std::string chart_name(std::size_t i) { return "chart " + std::to_string(i); }
+
+Prepared prepare(const PackChart& c, std::size_t index) {
+  if (c.faces.empty()) throw InputError("", chart_name(index) + " has no faces");
+  const int nv = static_cast<int>(c.uv.size());
+  for (std::size_t v = 0; v < c.uv.size(); ++v)
+    if (!is_finite(c.uv[v]))
+      throw InputError("", chart_name(index) + ": vertex " + std::to_string(v) + " has a non-finite UV");
+  double area = 0;
+  for (std::size_t f = 0; f < c.faces.size(); ++f) {
+    const Face& t = c.faces[f];
+    for (int k = 0; k < 3; ++k)
+      if (t[k] < 0 || t[k] >= nv)
+        throw InputError("", chart_name(index) + ": face " + std::to_string(f) + " references vertex " +
+                                 std::to_string(t[k]) + " but the chart has " + std::to_string(nv));
+    area += std::abs(signed_area(c.uv[t[0]], c.uv[t[1]], c.uv[t[2]]));
+  }
+  if (!(area > 0) || !std::isfinite(area))
+    throw InputError("", chart_name(index) + " has zero UV area");
+  if (!std::isfinite(c.area_3d) || c.area_3d < 0)
+    throw InputError("", chart_name(index) + ": area_3d is " + std::to_string(c.area_3d) +
+                             " (must be a finite value >= 0)");
+  Prepared p;
+  p.faces = &c.faces;
+  p.area = c.area_3d > 0 ? c.area_3d : area;
+  p.scale_in = std::sqrt(p.area / area);
+  Vec2d lo = c.uv[0], hi = c.uv[0];
+  for (const Vec2d& q : c.uv) {
+    lo = {std::min(lo.x, q.x), std::min(lo.y, q.y)};
+    hi = {std::max(hi.x, q.x), std::max(hi.y, q.y)};
+  }
+  p.centre = (lo + hi) * 0.5;
+  p.points.reserve(c.uv.size());
+  for (const Vec2d& q : c.uv) p.points.push_back((q - p.centre) * p.scale_in);
+  p.base_angle = pack_detail::min_area_rect_angle(p.points);
+  p.outline = pack_detail::chart_outline(p.points, c.faces);
+  const double cs = std::cos(p.base_angle), sn = std::sin(p.base_angle);
+  Vec2d rlo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  Vec2d rhi = -rlo;
+  for (const Vec2d& q : p.points) {
+    const Vec2d r{cs * q.x - sn * q.y, sn * q.x + cs * q.y};
+    rlo = {std::min(rlo.x, r.x), std::min(rlo.y, r.y)};
+    rhi = {std::max(rhi.x, r.x), std::max(rhi.y, r.y)};
+  }
+  p.length = std::max(rhi.x - rlo.x, rhi.y - rlo.y);
+  return p;
+}
+
+double rotation_angle(const Prepared& c, int k, int rotations) {
+  return c.base_angle + 2 * kPi * k / rotations;
+}
+
+// The chart's points rotated by rotation k and scaled to texels. Rasterization and the final
+// UVs both come from this one function, so they agree to the last bit.
+std::vector<Vec2d> texel_points(const Prepared& c, int k, int rotations, double scale) {
+  const double a = rotation_angle(c, k, rotations);
+  const double cs = std::cos(a) * scale, sn = std::sin(a) * scale;
+  std::vector<Vec2d> out(c.points.size());
+  for (std::size_t i = 0; i < out.size(); ++i)
+    out[i] = {cs * c.points[i].x - sn * c.points[i].y, sn * c.points[i].x + cs * c.points[i].y};
+  return out;
+}
+
+std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int rotations,
+                                       double scale, int limit_w, int limit_h) {
+  std::vector<ChartRaster> out(charts.size() * rotations);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size()),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t j = range.begin(); j != range.end(); ++j) {
+                        const Prepared& c = charts[j / rotations];
+                        const int k = static_cast<int>(j % rotations);
+                        out[j] = pack_detail::rasterize_chart(texel_points(c, k, rotations, scale),
+                                                              *c.faces, c.outline, limit_w, limit_h);
+                      }
+                    });
+  return out;
+}
+
+// One packing of all charts at the rasters' scale, in the given order (§6 step 3).
+// `tick(k)` is called every few charts with the number placed so far.
+template <class Tick>
+Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations,
+                  const std::vector<int>& order, int limit_w, int limit_h, int gutter,
+                  const PackOptions& options, double area_texels, const Tick& tick) {
+  Canvas canvas(limit_w, limit_h, gutter, options.growth_weight);
+  Attempt attempt;
+  attempt.placed.resize(rasters.size() / rotations);
+  const double aspect = static_cast<double>(limit_w) / limit_h;
+  std::vector<Candidate> candidates(2 * rotations);
+  for (std::size_t step = 0; step < order.size(); ++step) {
+    if (step % 32 == 31) tick(step);
+    const int chart = order[step];
+    const ChartRaster* r = &rasters[static_cast<std::size_t>(chart) * rotations];
+    Candidate chosen;
+    if (canvas.empty()) {
+      // The first chart: the rotation whose box is closest to the target's aspect.
+      double best_area = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < rotations; ++k) {
+        if (!canvas.fits_limits(r[k])) continue;
+        const double width = std::max<double>(r[k].w, r[k].h * aspect);
+        if (width * width < best_area) {
+          best_area = width * width;
+          chosen = canvas.centre(r[k]);
+          chosen.rotation = k;
+        }
+      }
+    } else {
+      if (options.fill_holes) chosen = canvas.best_inside(r, rotations);
+      if (!chosen.valid) {
+        // §6: W_expect = H_curr·W/H; grow sideways when the packing is narrower than that.
+        // Lowest cost wins; ties go to the lowest rotation, then the first side of the pair.
+        const Rect& box = canvas.bounds();
+        bool sideways = box.h * aspect > box.w;
+        for (int pass = 0; pass < 2 && !chosen.valid; ++pass, sideways = !sideways) {
+          const Side sides[2] = {sideways ? Side::Left : Side::Top,
+                                 sideways ? Side::Right : Side::Bottom};
+          tbb::parallel_for(0, 2 * rotations, [&](int j) {
+            candidates[j] = canvas.best_from_side(r[j / 2], sides[j % 2]);
+          });
+          for (int j = 0; j < 2 * rotations; ++j) {
+            const Candidate& c = candidates[j];
+            if (c.valid && (!chosen.valid || c.cost < chosen.cost)) {
+              chosen = c;
+              chosen.rotation = j / 2;
+            }
+          }
+        }
+      }
+    }
+    if (!chosen.valid) {  // does not fit at this scale
+      long long done = 0, all = 0;
+      for (const int c : order) {
+        const long long t = rasters[static_cast<std::size_t>(c) * rotations].texels;
+        all += t;
+        if (attempt.placed[c].rotation >= 0) done += t;
+      }
+      attempt.placed = {};
+      attempt.placed_fraction = static_cast<double>(done) / std::max<long long>(all, 1);
+      return attempt;
+    }
+    canvas.place(r[chosen.rotation], chosen.x, chosen.y);
+    attempt.placed[chart] = {chosen.rotation, chosen.x, chosen.y, r[chosen.rotation].origin};
+  }
+  attempt.ok = true;
+  attempt.box = canvas.bounds();
+  attempt.ratio = area_texels / static_cast<double>(attempt.box.area());
+  return attempt;
+}
+
+void validate(const PackOptions& o) {
+  auto bad = [](const std::string& m) { throw InputError("", m); };
+  if (o.width < 1 || o.width > 8192 || o.height < 1 || o.height > 8192)
+    bad("pack: texture size " + std::to_string(o.width) + "x" + std::to_string(o.height) +
+        " is outside 1..8192");
+  if (o.gutter < 0) bad("pack: gutter " + std::to_string(o.gutter) + " is negative");
+  if (o.width - 2 * o.gutter < 1 || o.height - 2 * o.gutter < 1)
+    bad("pack: a gutter of " + std::to_string(o.gutter) + " texels leaves no room in a " +
+        std::to_string(o.width) + "x" + std::to_string(o.height) + " texture");
+  if (o.rotations < 1 || o.rotations > 360)
+    bad("pack: rotations " + std::to_string(o.rotations) + " is outside 1..360");
+  if (!(o.growth_weight >= 0) || !std::isfinite(o.growth_weight))
+    bad("pack: growth_weight " + std::to_string(o.growth_weight) + " must be finite and >= 0");
+  if (!(o.scale_tolerance > 0 && o.scale_tolerance < 1))
+    bad("pack: scale_tolerance " + std::to_string(o.scale_tolerance) + " is outside (0, 1)");
+}
+
+}  // namespace
+
+PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& options,
+                       const Progress& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  validate(options);
+  PackResult result;
+  if (charts.empty()) return result;
+  report(progress, Stage::Packing, 0);
+
+  const int n = static_cast<int>(charts.size());
+  const int rotations = options.rotations, g = options.gutter;
+  const int limit_w = options.width - 2 * g, limit_h = options.height - 2 * g;
+  std::vector<Prepared> prepared(n);
+  for (int i = 0; i < n; ++i) prepared[i] = prepare(charts[i], i);
+  double total_area = 0;
+  for (const Prepared& p : prepared) total_area += p.area;
+
+  // §6 step 2: decreasing area; the second order sorts by the longer rectangle side.
+  std::vector<std::vector<int>> orders(options.try_orders ? 2 : 1, std::vector<int>(n));
+  for (auto& o : orders) std::iota(o.begin(), o.end(), 0);
+  std::stable_sort(orders[0].begin(), orders[0].end(),
+                   [&](int a, int b) { return prepared[a].area > prepared[b].area; });
+  if (options.try_orders)
+    std::stable_sort(orders[1].begin(), orders[1].end(),
+                     [&](int a, int b) { return prepared[a].length > prepared[b].length; });
+
+  // Scale search (texels per surface unit): grow while packings fit, then bisect between the
+  // largest scale that fits and the smallest that does not.
+  double scale = std::sqrt(0.75 * limit_w * limit_h / total_area);
+  double fits = 0, fails = std::numeric_limits<double>::infinity();
+  Attempt best;
+  int best_order = 0;
+  int attempts = 0;
+  while (true) {
+    if (attempts == kMaxAttempts)
+      throw InputError("", "pack: the " + std::to_string(n) + " charts do not fit a " +
+                               std::to_string(options.width) + "x" + std::to_string(options.height) +
+                               " texture with a gutter of " + std::to_string(g) + " texels");
+    report(progress, Stage::Packing, std::min(0.95, attempts / 10.0));
+    ++attempts;
+    const std::vector<ChartRaster> rasters = rasterize_all(prepared, rotations, scale, limit_w, limit_h);
+    const double area_texels = total_area * scale * scale;
+    std::vector<Attempt> tries(orders.size());
+    // Progress: about ten attempts are typical; within one, the share of charts placed.
+    const auto tick = [&](std::size_t done) {
+      report(progress, Stage::Packing, std::min(0.95, (attempts - 1 + static_cast<double>(done) / n) / 10));
+    };
+    tbb::parallel_for(0, static_cast<int>(orders.size()), [&](int o) {
+      tries[o] = pack_once(rasters, rotations, orders[o], limit_w, limit_h, g, options, area_texels, tick);
+    });
+    int ok = -1;
+    double placed = 0;
+    for (int o = 0; o < static_cast<int>(tries.size()); ++o) {
+      if (tries[o].ok && (ok < 0 || tries[o].ratio > tries[ok].ratio)) ok = o;
+      placed = std::max(placed, tries[o].placed_fraction);
+    }
+    if (ok >= 0) {
+      fits = scale;
+      best = std::move(tries[ok]);
+      best_order = ok;
+    } else {
+      fails = scale;
+    }
+    if (fits > 0 && fails < std::numeric_limits<double>::infinity()) {
+      if (fails / fits <= 1 + options.scale_tolerance) break;
+      scale = std::sqrt(fits * fails);
+    } else if (fits > 0) {
+      const double room = std::min(static_cast<double>(limit_w) / best.box.w,
+                                   static_cast<double>(limit_h) / best.box.h);
+      scale *= std::max(room, 1 + 4 * options.scale_tolerance);
+    } else {
+      // Nothing fitted yet: shrink by what did not fit (area goes with the square of scale).
+      scale *= std::sqrt(std::clamp(placed, 0.5, 0.98));
+    }
+  }
+
+  // Centre the packing in the texture; the gutter to the border is then at least g.
+  const Rect& box = best.box;
+  const int shift_x = g + (limit_w - box.w) / 2 - box.x, shift_y = g + (limit_h - box.h) / 2 - box.y;
+  result.placements.resize(n);
+  double uv_area = 0;
+  Vec2d lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  Vec2d hi = -lo;
+  for (int i = 0; i < n; ++i) {
+    const Placed& pl = best.placed[i];
+    const Prepared& p = prepared[i];
+    const std::vector<Vec2d> pts = texel_points(p, pl.rotation, rotations, fits);
+    const Vec2d shift{static_cast<double>(pl.x + shift_x), static_cast<double>(pl.y + shift_y)};
+    PackChart& c = charts[i];
+    for (std::size_t v = 0; v < pts.size(); ++v) {
+      const Vec2d t = (pts[v] - pl.origin) + shift;
+      c.uv[v] = {t.x / options.width, t.y / options.height};
+      lo = {std::min(lo.x, c.uv[v].x), std::min(lo.y, c.uv[v].y)};
+      hi = {std::max(hi.x, c.uv[v].x), std::max(hi.y, c.uv[v].y)};
+    }
+    for (const Face& f : c.faces) uv_area += std::abs(signed_area(c.uv[f[0]], c.uv[f[1]], c.uv[f[2]]));
+    ChartPlacement& out = result.placements[i];
+    out.angle = rotation_angle(p, pl.rotation, rotations);
+    out.scale = fits * p.scale_in;
+    const Vec2d rc{std::cos(out.angle) * p.centre.x - std::sin(out.angle) * p.centre.y,
+                   std::sin(out.angle) * p.centre.x + std::cos(out.angle) * p.centre.y};
+    out.offset = shift - pl.origin - rc * out.scale;
+  }
+  const double box_area = (hi.x - lo.x) * (hi.y - lo.y);
+  result.packing_ratio = box_area > 0 ? uv_area / box_area : 0;
+  result.utilization = uv_area;
+  result.texel_size = 1 / fits;
+  result.used_width = box.w;
+  result.used_height = box.h;
+  result.attempts = attempts;
+  result.by_length = best_order == 1;
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  report(progress, Stage::Packing, 1);
+  return result;
+}
+
+}  // namespace isochart
