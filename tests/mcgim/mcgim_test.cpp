@@ -328,3 +328,30 @@ TEST_CASE("a chart part behind a neck thinner than a sample is kept", "[mcgim]")
   CHECK(left > 70);
   CHECK(right > 70);
 }
+
+TEST_CASE("re-packed levels keep charts apart and stay watertight", "[mcgim]") {
+  // Re-packing (the default) lays the charts out anew for each size with isochart::pack_charts:
+  // mirrored charts (here: every other cube face flipped in u) are unmirrored first.
+  isochart::Mesh m = mcgim_test::cube_atlas(5);
+  for (std::size_t f = 0; f < m.faces.size(); ++f)
+    if (m.face_groups[f] % 2 == 1)
+      for (int k = 0; k < 3; ++k) m.uvs[m.face_uvs[f][k]].x = 1.0 - m.uvs[m.face_uvs[f][k]].x;
+  for (int res : {24, 48, 96}) {
+    LevelOptions o;
+    o.width = o.height = res;
+    const Level lv = build_level(m, o);
+    INFO(res);
+    check_watertight(lv, 2);
+    for (char mirrored : lv.image.chart_mirrored) CHECK(mirrored == 0);
+    CHECK(lv.stats.charts == 6);
+    CHECK(lv.stats.empty_charts == 0);
+  }
+  // The same level twice, and with another thread count, is the same.
+  LevelOptions o;
+  o.width = o.height = 40;
+  const Level a = build_level(m, o);
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+  const Level b = build_level(m, o);
+  CHECK(a.image.positions == b.image.positions);
+  CHECK(a.remesh.mesh.faces == b.remesh.mesh.faces);
+}
