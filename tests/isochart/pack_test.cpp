@@ -377,7 +377,7 @@ TEST_CASE("many tiny charts pack densely and fast", "[pack]") {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   check_packing(input, charts, o, r);
   CHECK(r.packing_ratio >= 0.5);
-  CHECK(seconds < 30);
+  CHECK(seconds < 60);  // about 10 s on two idle cores; a bound against pathological slowness
 }
 
 TEST_CASE("charts of a real atlas pack tighter than UVAtlas packed them", "[pack]") {
