@@ -51,6 +51,8 @@ using Action = std::function<void()>;
 
 void add_info(CLI::App& app, Context& ctx, Action& action);
 void add_stats(CLI::App& app, Context& ctx, Action& action);
+void add_render(CLI::App& app, Context& ctx, Action& action);
+void add_atlas(CLI::App& app, Context& ctx, Action& action);
 
 /// Throws InputError(file, msg) for an invalid option value (exit code 2).
 [[noreturn]] void bad_option(const std::string& message);

@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
   cli::Action action;
   cli::add_info(app, ctx, action);
   cli::add_stats(app, ctx, action);
+  cli::add_render(app, ctx, action);
+  cli::add_atlas(app, ctx, action);
 
   try {
     app.parse(argc, argv);

@@ -1,96 +1,257 @@
-// SCAFFOLD: minimal reader so the skeleton builds; replaced by the full I/O module.
+// Mesh I/O entry points: format dispatch, whole-file reading, atomic writing, and the text
+// scanning helpers the OBJ/OFF/PLY readers share.
 #include "isochart/io.h"
 
-#include <algorithm>
-#include <cstdio>
-#include <fstream>
-#include <sstream>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "io_internal.h"
 #include "isochart/builtin.h"
 #include "isochart/error.h"
 
 namespace isochart {
 
+namespace io_detail {
+
+std::string quoted(std::string_view token) {
+  constexpr std::size_t kMax = 40;
+  std::string out = "'";
+  static const char* hex = "0123456789abcdef";
+  for (std::size_t i = 0; i < token.size() && i < kMax; ++i) {
+    const auto c = static_cast<unsigned char>(token[i]);
+    if (c >= 0x20 && c < 0x7f) {
+      out += static_cast<char>(c);
+    } else {
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  if (token.size() > kMax) out += "...";
+  return out + "'";
+}
+
+void fail_at_line(const std::string& path, long long line, const std::string& message) {
+  throw InputError(path, "line " + std::to_string(line) + ": " + message);
+}
+
+void check_face_limit(const std::string& path, long long faces, const LoadOptions& options) {
+  if (faces > options.max_faces)
+    throw InputError(path, "has " + std::to_string(faces) + " faces, more than the limit of " +
+                               std::to_string(options.max_faces));
+}
+
+bool LineScanner::next(std::string_view& line) {
+  if (pos_ >= data_.size()) return false;
+  const char* begin = data_.data() + pos_;
+  const std::size_t left = data_.size() - pos_;
+  const void* nl = std::memchr(begin, '\n', left);
+  const std::size_t len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : left;
+  pos_ += nl ? len + 1 : len;
+  ++line_;
+  line = std::string_view(begin, len);
+  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+  if (std::memchr(line.data(), '\0', line.size()))
+    fail_at_line(path_, line_, "unexpected binary data (NUL byte); this is not a text mesh file");
+  return true;
+}
+
+bool parse_double(std::string_view token, double& value) {
+  if (token.size() > 1 && token[0] == '+' && token[1] != '-') token.remove_prefix(1);
+  const char* end = token.data() + token.size();
+  const auto r = std::from_chars(token.data(), end, value);
+  return r.ec == std::errc() && r.ptr == end;
+}
+
+bool parse_int(std::string_view token, long long& value) {
+  if (token.size() > 1 && token[0] == '+' && token[1] != '-') token.remove_prefix(1);
+  const char* end = token.data() + token.size();
+  const auto r = std::from_chars(token.data(), end, value);
+  return r.ec == std::errc() && r.ptr == end;
+}
+
+double expect_number(std::string_view& rest, const std::string& path, long long line, const char* what) {
+  std::string_view tok;
+  if (!next_token(rest, tok)) fail_at_line(path, line, std::string("expected ") + what);
+  double v = 0;
+  if (!parse_double(tok, v)) fail_at_line(path, line, quoted(tok) + " is not a number");
+  if (!std::isfinite(v)) fail_at_line(path, line, std::string(what) + " " + quoted(tok) + " is not finite");
+  return v;
+}
+
+void append_number(std::string& out, double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
+void append_number(std::string& out, float v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
+void append_number(std::string& out, long long v) {
+  char buf[24];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  out.append(buf, r.ptr);
+}
+
+std::string read_file(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw InputError(path, std::string("cannot open file: ") + std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) {
+    const int err = errno;
+    ::close(fd);
+    throw InputError(path, std::string("cannot read file: ") + std::strerror(err));
+  }
+  if (S_ISDIR(st.st_mode)) {
+    ::close(fd);
+    throw InputError(path, "is a directory, not a mesh file");
+  }
+  std::string data;
+  if (S_ISREG(st.st_mode)) data.reserve(static_cast<std::size_t>(st.st_size));
+  char buf[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n == 0) break;
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      const int err = errno;
+      ::close(fd);
+      throw InputError(path, std::string("cannot read file: ") + std::strerror(err));
+    }
+    data.append(buf, static_cast<std::size_t>(n));
+  }
+  ::close(fd);
+  return data;
+}
+
+}  // namespace io_detail
+
+using namespace io_detail;
+
 MeshFormat format_from_path(const std::string& path) {
   if (path.rfind("builtin:", 0) == 0) return MeshFormat::Builtin;
+  const auto slash = path.find_last_of('/');
   const auto dot = path.find_last_of('.');
-  std::string ext = dot == std::string::npos ? "" : path.substr(dot + 1);
-  std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash))
+    throw InputError(path, "has no file extension (expected .obj, .off, .ply, .gltf or .glb)");
+  std::string ext = path.substr(dot + 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == "obj") return MeshFormat::Obj;
   if (ext == "off") return MeshFormat::Off;
   if (ext == "ply") return MeshFormat::Ply;
   if (ext == "gltf") return MeshFormat::Gltf;
   if (ext == "glb") return MeshFormat::Glb;
-  throw InputError(path, "unknown mesh format '." + ext + "' (expected .obj, .off, .ply, .gltf or .glb)");
+  throw InputError(
+      path, "unknown mesh format " + quoted("." + ext) + " (expected .obj, .off, .ply, .gltf or .glb)");
 }
 
-RawMesh read_raw_mesh(const std::string& path, const LoadOptions&) {
-  RawMesh raw;
-  raw.source = path;
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot open file");
+RawMesh read_raw_mesh(const std::string& path, const LoadOptions& options) {
   const MeshFormat fmt = format_from_path(path);
-  if (fmt == MeshFormat::Off) {
-    std::string h;
-    in >> h;
-    long nv, nf, ne;
-    in >> nv >> nf >> ne;
-    raw.positions.resize(nv);
-    for (auto& p : raw.positions) in >> p.x >> p.y >> p.z;
-    raw.polygons.resize(nf);
-    for (auto& poly : raw.polygons) {
-      int n;
-      in >> n;
-      poly.resize(n);
-      for (int& i : poly) in >> i;
-    }
-  } else if (fmt == MeshFormat::Obj) {
-    std::string line;
-    while (std::getline(in, line)) {
-      std::istringstream ls(line);
-      std::string tag;
-      ls >> tag;
-      if (tag == "v") {
-        Vec3d p;
-        ls >> p.x >> p.y >> p.z;
-        raw.positions.push_back(p);
-      } else if (tag == "f") {
-        std::vector<int> poly;
-        std::string tok;
-        while (ls >> tok) poly.push_back(std::stoi(tok) - 1);
-        raw.polygons.push_back(poly);
-      }
-    }
-  } else {
-    throw InputError(path, "format not supported yet");
+  if (fmt == MeshFormat::Builtin) return to_raw_mesh(make_builtin(path.substr(8)), path);
+  const std::string data = read_file(path);
+  if (data.empty()) throw InputError(path, "file is empty");
+  switch (fmt) {
+    case MeshFormat::Obj:
+      return read_obj(path, data, options);
+    case MeshFormat::Off:
+      return read_off(path, data, options);
+    case MeshFormat::Ply:
+      return read_ply(path, data, options);
+    case MeshFormat::Gltf:
+      return read_gltf(path, data, false, options);
+    case MeshFormat::Glb:
+      return read_gltf(path, data, true, options);
+    case MeshFormat::Builtin:
+      break;
   }
-  return raw;
-}
-
-Mesh validate_mesh(const RawMesh& raw, bool, ValidationReport& report) {
-  Mesh m;
-  m.positions = raw.positions;
-  for (const auto& p : raw.polygons) m.faces.push_back({p[0], p[1], p[2]});
-  report.input_vertices = static_cast<int>(raw.positions.size());
-  report.input_faces = static_cast<int>(raw.polygons.size());
-  return m;
+  throw Error("unhandled mesh format");
 }
 
 LoadResult load_mesh(const std::string& path, const LoadOptions& options) {
+  const RawMesh raw = read_raw_mesh(path, options);
+  // The limit is on triangles, so polygons count with their triangulation.
+  long long triangles = 0;
+  for (const auto& poly : raw.polygons)
+    triangles += std::max<long long>(1, static_cast<long long>(poly.size()) - 2);
+  check_face_limit(path, triangles, options);
   LoadResult r;
-  RawMesh raw = read_raw_mesh(path, options);
   r.mesh = validate_mesh(raw, options.repair, r.report);
   return r;
 }
 
-void write_file_atomic(const std::string& path, const std::string& data) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    out << data;
-    if (!out) throw Error("cannot write " + path);
+void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& options) {
+  const MeshFormat fmt = format_from_path(path);
+  switch (fmt) {
+    case MeshFormat::Obj: {
+      if (options.texture.empty()) {
+        write_file_atomic(path, obj_text(mesh, "", options.write_groups));
+        return;
+      }
+      // The MTL sits beside the OBJ under the same stem; it goes first so that a finished
+      // OBJ never points at a missing MTL, and is removed again if the OBJ fails.
+      const auto slash = path.find_last_of('/');
+      const std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
+      std::string stem = slash == std::string::npos ? path : path.substr(slash + 1);
+      stem = stem.substr(0, stem.find_last_of('.'));
+      const std::string mtl_path = dir + stem + ".mtl";
+      write_file_atomic(mtl_path, mtl_text(options.texture));
+      try {
+        write_file_atomic(path, obj_text(mesh, stem + ".mtl", options.write_groups));
+      } catch (...) {
+        std::remove(mtl_path.c_str());
+        throw;
+      }
+      return;
+    }
+    case MeshFormat::Ply:
+      write_file_atomic(path, ply_bytes(mesh, options.binary_ply));
+      return;
+    case MeshFormat::Glb:
+      write_file_atomic(path, glb_bytes(mesh, options.texture));
+      return;
+    case MeshFormat::Off:
+    case MeshFormat::Gltf:
+    case MeshFormat::Builtin:
+      break;
   }
-  std::rename(tmp.c_str(), path.c_str());
+  throw InputError(path, "cannot write this format (expected .obj, .ply or .glb)");
+}
+
+void write_file_atomic(const std::string& path, const std::string& data) {
+  // pid + counter makes the name unique across processes and threads writing beside each
+  // other; the same directory makes the final rename atomic.
+  static std::atomic<unsigned> counter{0};
+  const std::string tmp = path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) throw InputError(path, std::string("cannot write: ") + std::strerror(errno));
+  bool ok = data.empty() || std::fwrite(data.data(), 1, data.size(), f) == data.size();
+  int err = ok ? 0 : errno;
+  if (std::fclose(f) != 0 && ok) {
+    ok = false;
+    err = errno;
+  }
+  if (ok && std::rename(tmp.c_str(), path.c_str()) != 0) {
+    ok = false;
+    err = errno;
+  }
+  if (!ok) {
+    std::remove(tmp.c_str());
+    throw InputError(path, std::string("cannot write: ") + std::strerror(err));
+  }
 }
 
 }  // namespace isochart

@@ -39,36 +39,45 @@ Topology::Topology(const std::vector<Face>& faces, int num_vertices)
     : num_vertices_(num_vertices) {
   const int nf = static_cast<int>(faces.size());
 
-  // Edges: sort the 3F half-edges by their undirected key.
+  // Edges: bucket the 3F half-edges by their smaller vertex (counting sort), then sort each
+  // small bucket by the larger vertex. Linear apart from the tiny per-vertex sorts.
   struct HalfEdge {
-    int a, b, face, corner;
+    int b, face, corner;
   };
-  std::vector<HalfEdge> hes;
-  hes.reserve(3 * static_cast<size_t>(nf));
+  std::vector<int> bucket(num_vertices + 1, 0);
   for (int f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int u = faces[f][k], v = faces[f][(k + 1) % 3];
-      hes.push_back({std::min(u, v), std::max(u, v), f, k});
-    }
-  std::sort(hes.begin(), hes.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    if (x.a != y.a) return x.a < y.a;
-    if (x.b != y.b) return x.b < y.b;
-    return x.face != y.face ? x.face < y.face : x.corner < y.corner;
-  });
-  face_edges_.assign(nf, Face{-1, -1, -1});
-  std::vector<std::pair<int, int>> edge_face_pairs;
-  edge_face_pairs.reserve(hes.size());
-  for (size_t i = 0; i < hes.size();) {
-    size_t j = i;
-    const int e = static_cast<int>(edges_.size());
-    edges_.push_back({hes[i].a, hes[i].b});
-    for (; j < hes.size() && hes[j].a == hes[i].a && hes[j].b == hes[i].b; ++j) {
-      face_edges_[hes[j].face][hes[j].corner] = e;
-      edge_face_pairs.emplace_back(e, hes[j].face);
-    }
-    i = j;
+    for (int k = 0; k < 3; ++k) ++bucket[std::min(faces[f][k], faces[f][(k + 1) % 3]) + 1];
+  for (int v = 0; v < num_vertices; ++v) bucket[v + 1] += bucket[v];
+  std::vector<HalfEdge> hes(3 * static_cast<size_t>(nf));
+  {
+    std::vector<int> cursor(bucket.begin(), bucket.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int u = faces[f][k], v = faces[f][(k + 1) % 3];
+        hes[cursor[std::min(u, v)]++] = {std::max(u, v), f, k};
+      }
   }
-  build_csr(num_edges(), edge_face_pairs, edge_face_offsets_, edge_face_data_);
+  face_edges_.assign(nf, Face{-1, -1, -1});
+  edges_.reserve(3 * static_cast<size_t>(nf) / 2 + 1);
+  edge_face_offsets_.assign(1, 0);
+  edge_face_data_.resize(hes.size());
+  for (int a = 0; a < num_vertices; ++a) {
+    const auto first = hes.begin() + bucket[a], last = hes.begin() + bucket[a + 1];
+    std::sort(first, last, [](const HalfEdge& x, const HalfEdge& y) {
+      return x.b != y.b ? x.b < y.b : (x.face != y.face ? x.face < y.face : x.corner < y.corner);
+    });
+    for (auto it = first; it != last;) {
+      const int e = static_cast<int>(edges_.size());
+      edges_.push_back({a, it->b});
+      auto jt = it;
+      for (; jt != last && jt->b == it->b; ++jt) {
+        face_edges_[jt->face][jt->corner] = e;
+        edge_face_data_[edge_face_offsets_.back() + (jt - it)] = jt->face;
+      }
+      edge_face_offsets_.push_back(edge_face_offsets_.back() + static_cast<int>(jt - it));
+      it = jt;
+    }
+  }
 
   face_adjacency_.assign(nf, Face{-1, -1, -1});
   for (int f = 0; f < nf; ++f)
@@ -79,7 +88,7 @@ Topology::Topology(const std::vector<Face>& faces, int num_vertices)
   for (int e = 0; e < num_edges(); ++e)
     if (edge_faces(e).size() > 2) nonmanifold_edges_.push_back(e);
 
-  // Vertex → faces and vertex → neighbours.
+  // Vertex → faces (in face order) and vertex → neighbours (sorted).
   std::vector<std::pair<int, int>> vf;
   vf.reserve(3 * static_cast<size_t>(nf));
   for (int f = 0; f < nf; ++f)
@@ -91,40 +100,46 @@ Topology::Topology(const std::vector<Face>& faces, int num_vertices)
     vv.emplace_back(e.v0, e.v1);
     vv.emplace_back(e.v1, e.v0);
   }
-  std::sort(vv.begin(), vv.end());
   build_csr(num_vertices, vv, vertex_neighbor_offsets_, vertex_neighbor_data_);
+  for (int v = 0; v < num_vertices; ++v)
+    std::sort(vertex_neighbor_data_.begin() + vertex_neighbor_offsets_[v],
+              vertex_neighbor_data_.begin() + vertex_neighbor_offsets_[v + 1]);
   num_referenced_ = 0;
   for (int v = 0; v < num_vertices; ++v) num_referenced_ += is_referenced(v) ? 1 : 0;
 
-  // Non-manifold vertices: incident faces that do not form one fan through shared edges.
-  std::vector<int> local_parent;
+  // Non-manifold vertices: walk the faces around v through the edges incident to v; if the
+  // walk from the first face does not reach them all, they form several fans.
+  std::vector<int> stack;
+  std::vector<char> seen;
   for (int v = 0; v < num_vertices; ++v) {
     const IndexRange vfs = vertex_faces(v);
     if (vfs.size() < 2) continue;
-    local_parent.resize(vfs.size());
-    std::iota(local_parent.begin(), local_parent.end(), 0);
-    auto find = [&](int x) {
-      while (local_parent[x] != x) x = local_parent[x] = local_parent[local_parent[x]];
-      return x;
+    seen.assign(vfs.size(), 0);
+    auto local = [&](int f) {
+      for (int i = 0; i < vfs.size(); ++i)
+        if (vfs[i] == f) return i;
+      return -1;
     };
-    // Faces around v are joined when they share an edge incident to v.
-    std::vector<std::pair<int, int>> spokes;  // (edge id, local face index)
-    for (int i = 0; i < vfs.size(); ++i) {
-      const int f = vfs[i];
+    stack.assign(1, 0);
+    seen[0] = 1;
+    int reached = 1;
+    while (!stack.empty()) {
+      const int f = vfs[stack.back()];
+      stack.pop_back();
       for (int k = 0; k < 3; ++k) {
-        const Edge& e = edges_[face_edges_[f][k]];
-        if (e.v0 == v || e.v1 == v) spokes.emplace_back(face_edges_[f][k], i);
+        const int e = face_edges_[f][k];
+        if (edges_[e].v0 != v && edges_[e].v1 != v) continue;
+        for (int g : edge_faces(e)) {
+          const int i = local(g);
+          if (i >= 0 && !seen[i]) {
+            seen[i] = 1;
+            ++reached;
+            stack.push_back(i);
+          }
+        }
       }
     }
-    std::sort(spokes.begin(), spokes.end());
-    for (size_t i = 1; i < spokes.size(); ++i)
-      if (spokes[i].first == spokes[i - 1].first) {
-        const int a = find(spokes[i].second), b = find(spokes[i - 1].second);
-        if (a != b) local_parent[std::max(a, b)] = std::min(a, b);
-      }
-    int fans = 0;
-    for (int i = 0; i < vfs.size(); ++i) fans += find(i) == i ? 1 : 0;
-    if (fans > 1) nonmanifold_vertices_.push_back(v);
+    if (reached < vfs.size()) nonmanifold_vertices_.push_back(v);
   }
 
   // Components through shared edges.

@@ -1,6 +1,17 @@
 #pragma once
 /// Mesh input and output: OBJ, OFF, PLY (ASCII and binary) and glTF 2.0 (.gltf/.glb) in;
 /// OBJ (+vt, +MTL), PLY and glb out. Built-in meshes ("builtin:NAME") load like files.
+///
+/// Conventions worth knowing:
+/// - Texture coordinates have their origin at the bottom left (OBJ's convention); glTF's
+///   top-left v is flipped (v' = 1 - v) on reading and writing.
+/// - OBJ normals are per corner; a mesh keeps the normalized mean per vertex.
+/// - glTF: every triangle, strip and fan primitive reached from the default scene (every
+///   mesh when there is no scene), node transforms applied (a mirroring transform reverses
+///   the winding); each primitive is one face group. Vertices are shared only within a
+///   primitive, or between primitives of one node that use the same attribute accessors.
+/// - An attribute only some faces or vertices have is dropped (normals, colours) or filled
+///   with (0, 0) (texture coordinates), with a warning in the validation report.
 
 #include <string>
 
@@ -25,13 +36,15 @@ struct LoadOptions {
 };
 
 struct LoadResult {
-  Mesh mesh;                  ///< validated (and repaired) mesh
-  ValidationReport report;    ///< what was found in the input and what was repaired
+  Mesh mesh;                ///< validated (and repaired) mesh
+  ValidationReport report;  ///< what was found in the input and what was repaired
 };
 
-/// Reads, validates and (by default) repairs a mesh.
+/// Reads, validates and (by default) repairs a mesh. The whole file is read at once; header
+/// counts are checked against the file size before anything is allocated.
 /// \throw InputError naming the file and the problem (missing, unreadable, unknown format,
-///        parse error with line number, empty, NaN/Inf, index out of range, too large, ...).
+///        parse error with line number for text formats or the element ("vertex 17",
+///        "face 3") for binary ones, empty, NaN/Inf, index out of range, too large, ...).
 LoadResult load_mesh(const std::string& path, const LoadOptions& options = {});
 
 /// Reads a file into a raw polygon soup without validation (what the file says).
@@ -50,10 +63,21 @@ struct SaveOptions {
 
 /// Writes `mesh` to `path` (format from the extension: .obj, .ply, .glb), via a temporary
 /// file in the same directory that is renamed over `path` only when complete.
-/// \throw InputError for an unsupported extension, Error when writing fails.
+/// - OBJ: every number as the shortest decimal that reads back exactly; `vt`, `vn`,
+///   `g chartN` per face group; with a texture, `NAME.mtl` beside it (written first, removed
+///   again if the OBJ fails).
+/// - PLY: float positions and normals, uchar colours, per-corner UVs as a face `texcoord`
+///   list (MeshLab's convention); no groups.
+/// - glb: float POSITION/NORMAL/COLOR_0/TEXCOORD_0 with vertices split at UV seams, one
+///   primitive per face group (uint32 indices), the texture embedded as baseColorTexture.
+///   The bytes depend only on the mesh and the texture.
+/// \throw InputError for an unsupported extension, a path that cannot be written, or a
+///        texture that cannot be read or is not PNG/JPEG (glb); nothing is left behind.
 void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& options = {});
 
-/// Writes `data` to `path` atomically (temporary file + rename). Used for every output.
+/// Writes `data` to `path` atomically: a temporary file beside it (named from the pid and a
+/// counter) renamed over `path`, or removed on failure. Used for every output.
+/// \throw InputError(path, "cannot write: REASON").
 void write_file_atomic(const std::string& path, const std::string& data);
 
 }  // namespace isochart

@@ -20,6 +20,7 @@ struct Vec2d {
   Vec2d& operator+=(const Vec2d& o) { x += o.x; y += o.y; return *this; }
   Vec2d& operator-=(const Vec2d& o) { x -= o.x; y -= o.y; return *this; }
   Vec2d& operator*=(double s) { x *= s; y *= s; return *this; }
+  Vec2d& operator/=(double s) { x /= s; y /= s; return *this; }
   constexpr bool operator==(const Vec2d& o) const { return x == o.x && y == o.y; }
   constexpr bool operator!=(const Vec2d& o) const { return !(*this == o); }
 };

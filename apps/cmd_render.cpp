@@ -1,0 +1,140 @@
+// `isocharts render MESH -o view.png`: shaded, chart-coloured or textured views of a mesh, or
+// its UV layout.
+
+#include <sstream>
+
+#include "cli.h"
+#include "isochart/builtin.h"
+#include "isochart/error.h"
+#include "isochart/image.h"
+#include "isochart/render.h"
+
+namespace cli {
+
+namespace {
+
+struct RenderArgs {
+  std::string input;
+  std::string output;
+  std::string texture;
+  bool charts = false;
+  bool wireframe = false;
+  bool uv_layout = false;
+  bool ortho = false;
+  bool transparent = false;
+  int views = 4;
+  int width = 0;   // 0: 400 per view (1024 for --uv-layout)
+  int height = 0;  // 0: 400 (1024 for --uv-layout)
+  int supersample = 2;
+};
+
+void run_render(const Context& ctx, const RenderArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (a.charts && !a.texture.empty()) bad_option("--charts and --texture are exclusive");
+  if (a.uv_layout && (!a.texture.empty() || a.wireframe || a.ortho || a.transparent))
+    bad_option(
+        "--uv-layout draws the atlas itself; it takes no --texture, --wireframe, --ortho or --transparent");
+  const int width = a.width > 0 ? a.width : (a.uv_layout ? 1024 : 400 * a.views);
+  const int height = a.height > 0 ? a.height : (a.uv_layout ? 1024 : 400);
+  if (static_cast<long long>(width) * height * a.supersample * a.supersample > (1LL << 25))
+    bad_option("image " + std::to_string(width) + "x" + std::to_string(height) + " with supersample " +
+               std::to_string(a.supersample) + " is too large to render");
+  if (!a.uv_layout && width < a.views)
+    bad_option("--width " + std::to_string(width) + " is too small for " + std::to_string(a.views) +
+               " views");
+
+  // Built-in meshes are clean by construction and need no loading or repair.
+  const std::string prefix = "builtin:";
+  isochart::Mesh mesh = a.input.rfind(prefix, 0) == 0 ? isochart::make_builtin(a.input.substr(prefix.size()))
+                                                      : ctx.load(a.input).mesh;
+  // The options are checked above, so what the library still rejects is the mesh's content
+  // (no charts, no UVs, bad indices): name the mesh file.
+  auto for_input = [&](auto&& fn) {
+    try {
+      return fn();
+    } catch (const isochart::InputError& e) {
+      if (!e.file().empty()) throw;
+      throw isochart::InputError(a.input, e.what());
+    }
+  };
+
+  isochart::Image image;
+  std::string mode;
+  if (a.uv_layout) {
+    image = for_input([&] { return isochart::render_uv_layout(mesh, width, height); });
+    mode = "uv-layout";
+  } else {
+    isochart::RenderOptions o;
+    o.views = a.views;
+    o.width = width;
+    o.height = height;
+    o.wireframe = a.wireframe;
+    o.perspective = !a.ortho;
+    o.transparent = a.transparent;
+    o.supersample = a.supersample;
+    isochart::Image texture;
+    if (!a.texture.empty()) {
+      if (!mesh.has_uvs())
+        throw isochart::InputError(a.input, "mesh has no texture coordinates; --texture needs them");
+      texture = isochart::read_image(a.texture);
+      o.texture = &texture;
+      o.color = isochart::ColorMode::Textured;
+      mode = "textured";
+    } else if (a.charts) {
+      o.color = isochart::ColorMode::Charts;
+      mode = "charts";
+    } else {
+      mode = "shaded";
+    }
+    image = for_input([&] { return isochart::render_mesh(mesh, o); });
+  }
+  isochart::write_image(a.output, image);
+
+  nlohmann::json j;
+  j["file"] = a.input;
+  j["output"] = a.output;
+  j["mode"] = mode;
+  j["views"] = a.uv_layout ? 0 : a.views;
+  j["width"] = image.width;
+  j["height"] = image.height;
+  j["faces"] = mesh.num_faces();
+  j["seconds"] = seconds_since(t0);
+  ctx.emit(j, a.output + "\n");
+}
+
+}  // namespace
+
+void add_render(CLI::App& app, Context& ctx, Action& action) {
+  auto args = std::make_shared<RenderArgs>();
+  CLI::App* sub =
+      app.add_subcommand("render", "Render views of a mesh (shaded, charts, textured) or its UV layout");
+  sub->add_option("input", args->input, "Mesh file (OBJ/OFF/PLY/glTF) or builtin:NAME")->required();
+  sub->add_option("-o,--output", args->output, "Output image (.png, .jpg, .exr, ...)")->required();
+  sub->add_option("--texture", args->texture, "Texture image mapped through the mesh's UVs");
+  sub->add_flag("--charts", args->charts, "Colour each chart (face groups, else UV charts)");
+  sub->add_flag("--wireframe", args->wireframe, "Draw the triangle edges");
+  sub->add_flag("--uv-layout", args->uv_layout, "Draw the atlas in texture space instead of 3D views");
+  sub->add_option("--views", args->views,
+                  "Number of views side by side: front, right, back, left, top, bottom, "
+                  "front-right, back-left")
+      ->check(CLI::Range(1, 8))
+      ->capture_default_str();
+  sub->add_option("--width", args->width,
+                  "Image width in pixels (default 400 per view; 1024 for --uv-layout)")
+      ->check(CLI::Range(1, 16384));
+  sub->add_option("--height", args->height, "Image height in pixels (default 400; 1024 for --uv-layout)")
+      ->check(CLI::Range(1, 16384));
+  sub->add_flag("--ortho", args->ortho, "Orthographic instead of perspective projection");
+  sub->add_flag("--transparent", args->transparent, "Transparent background (RGBA) instead of white");
+  sub->add_option("--supersample", args->supersample, "Samples per pixel along each axis (anti-aliasing)")
+      ->check(CLI::Range(1, 4))
+      ->capture_default_str();
+  sub->footer(
+      "Examples:\n"
+      "  isocharts render builtin:creature -o creature.png --views 4 --width 1600 --height 400\n"
+      "  isocharts render atlas.obj --charts --wireframe -o charts.png\n"
+      "  isocharts render atlas.obj --uv-layout -o layout.png");
+  sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_render(ctx, *args); }; });
+}
+
+}  // namespace cli

@@ -1,0 +1,55 @@
+#pragma once
+/// Float images and their file I/O through OpenImageIO (PNG, JPG, EXR, TIFF, ... by extension).
+
+#include <string>
+#include <vector>
+
+namespace isochart {
+
+/// A float image, `height` rows of `width` pixels of `channels` values, row-major, top row
+/// first: the value of channel c at column x, row y is pixels[(y * width + x) * channels + c].
+/// Colours are in [0, 1] (8-bit files are scaled on read and clamped on write); float formats
+/// (EXR) hold any value. Alpha, when present (2 or 4 channels, last), is straight (colours not
+/// premultiplied). A texture coordinate (u, v) = (0, 0) is the bottom-left corner.
+struct Image {
+  int width = 0;
+  int height = 0;
+  int channels = 0;
+  std::vector<float> pixels;  ///< width × height × channels values
+
+  Image() = default;
+  /// An image filled with `value` in every channel.
+  Image(int width_, int height_, int channels_, float value = 0.0f)
+      : width(width_),
+        height(height_),
+        channels(channels_),
+        pixels(static_cast<std::size_t>(width_) * height_ * channels_, value) {}
+
+  bool empty() const { return pixels.empty(); }
+  float& at(int x, int y, int c) { return pixels[(static_cast<std::size_t>(y) * width + x) * channels + c]; }
+  float at(int x, int y, int c) const {
+    return pixels[(static_cast<std::size_t>(y) * width + x) * channels + c];
+  }
+};
+
+/// How texture lookups treat coordinates outside [0, 1].
+enum class Wrap { Clamp, Repeat };
+
+/// Bilinear lookup at texture coordinate (u, v) (v = 0 is the bottom row, texel centres at
+/// half-integers). Writes `image.channels` values to `out`.
+void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wrap = Wrap::Clamp);
+
+/// Reads the first subimage of an image file; 8-bit and 16-bit data are scaled to [0, 1].
+/// \throw InputError(path, ...) when the file is missing, unreadable, corrupt or in a format
+///        OpenImageIO does not know.
+Image read_image(const std::string& path);
+
+/// Writes `image` to `path` in the format given by the extension: float for .exr/.hdr/.pfm,
+/// 8-bit otherwise (values clamped to [0, 1]; JPEG drops an alpha channel). The image is
+/// written to a temporary file in the same directory (same extension) and renamed over
+/// `path` only when complete, so `path` never holds a partial image.
+/// \throw InputError(path, ...) for an unknown extension or a missing directory,
+///        Error when writing fails (the temporary file is removed).
+void write_image(const std::string& path, const Image& image);
+
+}  // namespace isochart

@@ -1,0 +1,538 @@
+// The iso-charts driver (Iso-charts §3): recursive stretch-driven splitting, merging, packing.
+
+#include "isochart/atlas.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <numeric>
+#include <set>
+#include <unordered_map>
+
+#include "chart.h"
+#include "isochart/embedding.h"
+#include "isochart/error.h"
+#include "isochart/geodesic.h"
+#include "isochart/stretch.h"
+#include "partition.h"
+#include "rng.h"
+
+namespace isochart {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Fraction of the chart's triangles that `uv` maps clockwise (either orientation counts as
+// unflipped: the chart may be mirrored as a whole).
+double flipped_fraction(const detail::ChartGeometry& g, const std::vector<Vec2d>& uv) {
+  int negative = 0;
+  for (const Face& t : g.tris) negative += signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) < 0 ? 1 : 0;
+  const int n = g.num_faces();
+  return n > 0 ? std::min(negative, n - negative) / static_cast<double>(n) : 0.0;
+}
+
+// Seconds per stage of one unit of work, summed into the atlas report in a fixed order.
+struct StageTimes {
+  double geodesics = 0, embedding = 0, optimization = 0, clustering = 0, graph_cut = 0;
+  void add(const StageTimes& o) {
+    geodesics += o.geodesics;
+    embedding += o.embedding;
+    optimization += o.optimization;
+    clustering += o.clustering;
+    graph_cut += o.graph_cut;
+  }
+};
+
+// A finished chart.
+struct DoneChart {
+  detail::ChartGeometry geometry;
+  detail::ChartParam param;
+};
+
+// A chart waiting to be processed: its faces and how many subdivisions produced it.
+struct Work {
+  std::vector<int> faces;
+  int depth = 0;
+};
+
+// What processing one chart produced: either an accepted parameterization or parts to recurse on.
+struct Outcome {
+  bool accepted = false;
+  bool components_only = false;  // the parts are just the chart's disconnected pieces
+  DoneChart chart;
+  std::vector<std::vector<int>> parts;  // parent face ids per part
+  StageTimes times;
+};
+
+class Builder {
+ public:
+  Builder(const Mesh& mesh, const AtlasOptions& o, const Progress& progress)
+      : mesh_(mesh), o_(o), progress_(progress), topo_(mesh) {
+    split_.alpha = o.alpha;
+    split_.medial_fraction = o.medial_fraction;
+    split_.graph_cut = o.graph_cut;
+    split_.min_rep_distance = 10 * mean_edge_length(mesh, topo_);
+    param_.max_l2 = o.max_l2;
+    param_.max_linf = o.max_linf;
+    param_.optimize_passes = o.optimize_passes;
+    component_vertices_.assign(topo_.num_components(), 0);
+    std::vector<int> seen(mesh.num_vertices(), 0);
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      for (int v : mesh.faces[f])
+        if (!seen[v]) {
+          seen[v] = 1;
+          ++component_vertices_[topo_.face_components()[f]];
+        }
+  }
+
+  Atlas run() {
+    const auto t_start = Clock::now();
+    // Every connected component starts as one chart.
+    std::vector<Work> queue(topo_.num_components());
+    for (int f = 0; f < mesh_.num_faces(); ++f) queue[topo_.face_components()[f]].faces.push_back(f);
+    std::vector<DoneChart> done = recurse(std::move(queue), false);
+    charts_before_merge_ = static_cast<int>(done.size());
+
+    // --max-charts N: split the worst chart until there are N.
+    while (o_.max_charts > 0 && static_cast<int>(done.size()) < o_.max_charts) {
+      auto worst = std::max_element(done.begin(), done.end(), [](const DoneChart& a, const DoneChart& b) {
+        if (a.geometry.num_faces() < 2) return b.geometry.num_faces() >= 2;
+        if (b.geometry.num_faces() < 2) return false;
+        return a.param.l2 < b.param.l2;
+      });
+      if (worst == done.end() || worst->geometry.num_faces() < 2) break;
+      std::vector<Work> q{Work{worst->geometry.faces, 1}};
+      done.erase(worst);
+      std::vector<DoneChart> more = recurse(std::move(q), true);
+      for (auto& c : more) done.push_back(std::move(c));
+    }
+    charts_before_merge_ = std::max<int>(charts_before_merge_, static_cast<int>(done.size()));
+
+    const auto t_merge = Clock::now();
+    if (o_.merge) merge(done);
+    const double merge_seconds = since(t_merge);
+
+    // Stable output order: by smallest parent face id.
+    std::sort(done.begin(), done.end(), [](const DoneChart& a, const DoneChart& b) {
+      return *std::min_element(a.geometry.faces.begin(), a.geometry.faces.end()) <
+             *std::min_element(b.geometry.faces.begin(), b.geometry.faces.end());
+    });
+
+    Atlas atlas = assemble(done);
+    const PackResult pr = pack_atlas(mesh_, atlas, o_.pack, progress_);
+    atlas.stats.charts_before_merge = charts_before_merge_;
+    atlas.stats.splits = splits_;
+    atlas.stats.seed = o_.seed;
+    auto& s = atlas.stats.seconds;
+    s["geodesics"] = times_.geodesics;
+    s["embedding"] = times_.embedding;
+    s["optimization"] = times_.optimization;
+    s["clustering"] = times_.clustering;
+    s["graph_cut"] = times_.graph_cut;
+    s["merging"] = merge_seconds;
+    s["packing"] = pr.seconds;
+    s["total"] = since(t_start);
+    return atlas;
+  }
+
+ private:
+  // Processes charts generation by generation; charts of a generation run in parallel and their
+  // results are collected in queue order, so the output never depends on the thread count.
+  std::vector<DoneChart> recurse(std::vector<Work> queue, bool force_first_split) {
+    std::vector<DoneChart> done;
+    bool force = force_first_split;
+    while (!queue.empty()) {
+      std::vector<Outcome> out(queue.size());
+      tbb::parallel_for(size_t(0), queue.size(), [&](size_t i) { out[i] = process(queue[i], force); });
+      force = false;
+      std::vector<Work> next;
+      for (size_t i = 0; i < out.size(); ++i) {
+        Outcome& r = out[i];
+        times_.add(r.times);
+        if (r.accepted) {
+          accepted_faces_ += r.chart.geometry.num_faces();
+          done.push_back(std::move(r.chart));
+        } else {
+          ++splits_;
+          // Separating disconnected pieces is not a subdivision: they keep their depth.
+          const int depth = queue[i].depth + (r.components_only ? 0 : 1);
+          for (auto& p : r.parts) next.push_back(Work{std::move(p), depth});
+        }
+      }
+      report(progress_, Stage::Clustering, static_cast<double>(accepted_faces_) / std::max(1, mesh_.num_faces()));
+      queue.swap(next);
+    }
+    return done;
+  }
+
+  std::uint64_t chart_seed(const std::vector<int>& faces) const {
+    return mix_seed(mix_seed(o_.seed, static_cast<std::uint64_t>(*std::min_element(faces.begin(), faces.end()))),
+                    faces.size());
+  }
+
+  // Parameterizes the chart if it can meet the bounds, otherwise splits it (§3 steps 1–6).
+  Outcome process(const Work& work, bool force_split) const {
+    Outcome out;
+    const std::vector<int>& faces = work.faces;
+    detail::ChartGeometry g = detail::make_chart(mesh_, faces);
+    // Faces meeting only at a vertex would make a pinched chart: each fan gets its own copy.
+    const Topology topo = detail::chart_topology(g);
+    if (topo.num_components() > 1) {
+      out.components_only = true;
+      out.parts.resize(topo.num_components());
+      for (int f = 0; f < g.num_faces(); ++f) out.parts[topo.face_components()[f]].push_back(g.faces[f]);
+      return out;
+    }
+    detail::ParamOptions po = param_;
+    po.seed = chart_seed(faces);
+    if (g.num_faces() == 1) {
+      out.accepted = true;
+      out.chart.param = detail::parameterize(g, {}, po);
+      out.chart.geometry = std::move(g);
+      return out;
+    }
+    Embedding emb = embed(g, out.times, landmarks_for(g, faces));
+    const bool disk_like = topo.genus() == 0 && !topo.boundary_loops().empty();
+    if (disk_like && !force_split && try_accept(g, topo, detail::isomap_uv(emb), po, out)) return out;
+    // Split (§5).
+    auto t0 = Clock::now();
+    detail::SplitKind kind;
+    int m = 0;
+    detail::SplitOptions so = split_;
+    so.allow_general = work.depth == 0;
+    std::vector<int> labels = detail::spectral_partition(g, emb, so, kind, m);
+    if (m >= 2) m = detail::make_labels_connected(topo, g.positions, labels);
+    out.times.clustering += since(t0);
+    if (m >= 2 && split_.graph_cut) {
+      t0 = Clock::now();
+      detail::optimize_boundaries(g, topo, emb, labels, m, so);
+      detail::smooth_labels(topo, labels);
+      m = detail::make_labels_connected(topo, g.positions, labels);
+      out.times.graph_cut += since(t0);
+    }
+    if (m < 2) {
+      labels = detail::fallback_partition(g, topo, emb, m);
+      m = detail::make_labels_connected(topo, g.positions, labels);
+    }
+    out.parts.assign(m, {});
+    for (int f = 0; f < g.num_faces(); ++f) out.parts[labels[f]].push_back(g.faces[f]);
+    if (m < 2) {
+      // Cannot split (should not happen): accept the best parameterization we have so the run ends.
+      out.parts.clear();
+      out.accepted = true;
+      out.chart.param = detail::parameterize(g, detail::isomap_uv(emb), po);
+      out.chart.geometry = std::move(g);
+    }
+    return out;
+  }
+
+  // Landmarks for chart g (with parent faces `faces`): the full count for a whole component,
+  // in proportion to the chart's share of its component's vertices below that, at least 25.
+  int landmarks_for(const detail::ChartGeometry& g, const std::vector<int>& faces) const {
+    const int component = component_vertices_[topo_.face_components()[faces.front()]];
+    const double share = component > 0 ? static_cast<double>(g.num_vertices()) / component : 1.0;
+    return std::clamp(static_cast<int>(o_.landmarks * share), std::min(25, o_.landmarks), o_.landmarks);
+  }
+
+  Embedding embed(const detail::ChartGeometry& g, StageTimes& t, int landmarks) const {
+    auto t0 = Clock::now();
+    const GeodesicSolver solver(g.positions, g.tris);
+    t.geodesics += since(t0);
+    EmbeddingOptions eo;
+    eo.landmarks = landmarks;
+    t0 = Clock::now();
+    Embedding e = landmark_isomap(solver, eo);
+    t.embedding += since(t0);
+    return e;
+  }
+
+  // Chart merging (§6): charts, smallest first, into the neighbour with the most similar average
+  // normal, whenever the merged chart still meets the bounds.
+  void merge(std::vector<DoneChart>& charts) const {
+    const int total_faces = mesh_.num_faces();
+    const int min_charts = std::max(1, o_.max_charts);
+    std::vector<int> chart_of(total_faces, -1);
+    auto rebuild_index = [&] {
+      for (int c = 0; c < static_cast<int>(charts.size()); ++c)
+        for (int f : charts[c].geometry.faces) chart_of[f] = c;
+    };
+    rebuild_index();
+    const std::vector<Vec3d> fn = face_normals(mesh_);
+    const std::vector<double> fa = face_areas(mesh_);
+    auto avg_normal = [&](const DoneChart& c) {
+      Vec3d n;
+      for (int f : c.geometry.faces) n += fn[f] * fa[f];
+      return normalized(n);
+    };
+    std::vector<char> tried(charts.size(), 0);
+    std::set<std::pair<std::pair<int, size_t>, std::pair<int, size_t>>> failed;
+    bool progress = true;
+    while (progress && static_cast<int>(charts.size()) > min_charts) {
+      progress = false;
+      // Smallest untried small chart.
+      int small = -1;
+      for (int c = 0; c < static_cast<int>(charts.size()); ++c) {
+        if (tried[c] || charts[c].geometry.num_faces() > o_.merge_max_fraction * total_faces) continue;
+        if (small < 0 || charts[c].geometry.num_faces() < charts[small].geometry.num_faces()) small = c;
+      }
+      if (small < 0) break;
+      tried[small] = 1;
+      std::vector<int> neighbours;
+      for (int f : charts[small].geometry.faces)
+        for (int k = 0; k < 3; ++k) {
+          const int nb = topo_.opposite_face(f, k);
+          if (nb >= 0 && chart_of[nb] != small &&
+              std::find(neighbours.begin(), neighbours.end(), chart_of[nb]) == neighbours.end())
+            neighbours.push_back(chart_of[nb]);
+        }
+      const Vec3d n0 = avg_normal(charts[small]);
+      std::sort(neighbours.begin(), neighbours.end(), [&](int a, int b) {
+        const double da = dot(n0, avg_normal(charts[a])), db = dot(n0, avg_normal(charts[b]));
+        return da != db ? da > db : a < b;
+      });
+      // Pairs that failed keep failing until one side changes: skip them.
+      auto key = [&](int c) {
+        const auto& f = charts[c].geometry.faces;
+        return std::make_pair(*std::min_element(f.begin(), f.end()), f.size());
+      };
+      neighbours.erase(std::remove_if(neighbours.begin(), neighbours.end(),
+                                      [&](int nb) { return failed.count(std::minmax(key(small), key(nb))) > 0; }),
+                       neighbours.end());
+      // Candidates are tried in parallel; the first success in normal-similarity order wins,
+      // so the result does not depend on the thread count.
+      std::vector<Outcome> tries(neighbours.size());
+      std::atomic<size_t> first_success{neighbours.size()};
+      tbb::parallel_for(size_t(0), neighbours.size(), [&](size_t i) {
+        if (i > first_success.load()) return;  // an earlier candidate already succeeded
+        tries[i] = merge_charts(charts[small], charts[neighbours[i]]);
+        if (tries[i].accepted) {
+          size_t cur = first_success.load();
+          while (i < cur && !first_success.compare_exchange_weak(cur, i)) {
+          }
+        }
+      });
+      // Candidates before the winner certainly ran and failed; later ones may not have run,
+      // depending on timing, so they are not recorded (the record must not depend on threads).
+      const size_t winner = first_success.load();
+      for (size_t i = 0; i < std::min(winner, neighbours.size()); ++i)
+        failed.insert(std::minmax(key(small), key(neighbours[i])));
+      if (winner < neighbours.size()) {
+        const size_t i = winner;
+        const int nb = neighbours[i];
+        // Replace the neighbour with the merged chart and drop the small one.
+        charts[nb] = std::move(tries[i].chart);
+        tried[nb] = 0;
+        charts.erase(charts.begin() + small);
+        tried.erase(tried.begin() + small);
+        rebuild_index();
+        progress = true;
+      }
+      if (!progress) {
+        // Nothing merged for this chart; look at the next smallest.
+        progress = std::find(tried.begin(), tried.end(), 0) != tried.end();
+      }
+    }
+  }
+
+  // Tries to merge chart `a` into chart `b`. The start is the union of both parameterizations,
+  // `a` moved onto `b` by the similarity that best matches their shared boundary vertices, so
+  // no new embedding is needed; it is then untangled and optimized like any other start.
+  Outcome merge_charts(const DoneChart& a, const DoneChart& b) const {
+    Outcome out;
+    std::vector<int> faces = a.geometry.faces;
+    faces.insert(faces.end(), b.geometry.faces.begin(), b.geometry.faces.end());
+    std::sort(faces.begin(), faces.end());
+    detail::ChartGeometry g = detail::make_chart(mesh_, faces);
+    const Topology topo = detail::chart_topology(g);
+    if (topo.num_components() != 1 || topo.genus() != 0 || topo.boundary_loops().empty()) return out;
+
+    // Texture coordinate of each parent vertex in either chart (first copy wins).
+    std::unordered_map<int, Vec2d> uv_a, uv_b;
+    for (int v = 0; v < a.geometry.num_vertices(); ++v) uv_a.emplace(a.geometry.vertex_parent[v], a.param.uv[v]);
+    for (int v = 0; v < b.geometry.num_vertices(); ++v) uv_b.emplace(b.geometry.vertex_parent[v], b.param.uv[v]);
+    std::vector<std::pair<Vec2d, Vec2d>> shared;  // (in a, in b)
+    for (const auto& [pv, ua] : uv_a) {
+      const auto it = uv_b.find(pv);
+      if (it != uv_b.end()) shared.emplace_back(ua, it->second);
+    }
+    if (shared.size() < 2) return out;
+    std::sort(shared.begin(), shared.end(), [](const auto& x, const auto& y) {
+      return x.first.x != y.first.x ? x.first.x < y.first.x : x.first.y < y.first.y;
+    });
+    // Least-squares similarity (rotation, scale, translation; never a reflection) a → b.
+    Vec2d ca, cb;
+    for (const auto& [p, q] : shared) {
+      ca += p;
+      cb += q;
+    }
+    ca /= static_cast<double>(shared.size());
+    cb /= static_cast<double>(shared.size());
+    double sxx = 0, sxy = 0, norm_a = 0;
+    for (const auto& [p, q] : shared) {
+      const Vec2d x = p - ca, y = q - cb;
+      sxx += dot(x, y);
+      sxy += cross(x, y);
+      norm_a += dot(x, x);
+    }
+    if (!(norm_a > 0)) return out;
+    const double angle = std::atan2(sxy, sxx);
+    const double scale = std::hypot(sxx, sxy) / norm_a;
+    const double c = std::cos(angle) * scale, sn = std::sin(angle) * scale;
+    auto to_b = [&](const Vec2d& p) {
+      const Vec2d x = p - ca;
+      return Vec2d{c * x.x - sn * x.y, sn * x.x + c * x.y} + cb;
+    };
+    std::vector<Vec2d> start_uncut(g.num_vertices());
+    for (int v = 0; v < g.num_vertices(); ++v) {
+      const int pv = g.vertex_parent[v];
+      const auto it = uv_b.find(pv);
+      start_uncut[v] = it != uv_b.end() ? it->second : to_b(uv_a.at(pv));
+    }
+    detail::ParamOptions po = param_;
+    po.seed = chart_seed(faces);
+    try_accept(g, topo, start_uncut, po, out);
+    return out;
+  }
+
+  // Parameterizes a genus-0 chart with boundary and accepts it into `out` if it meets the
+  // bounds. Several boundary loops are slit into one first; the slit has zero width, so the
+  // uncut chart's embedding is a valid start for the slit chart too.
+  bool try_accept(const detail::ChartGeometry& g, const Topology& topo, const std::vector<Vec2d>& start_uv,
+                  const detail::ParamOptions& po, Outcome& out) const {
+    detail::ChartGeometry cg = g;
+    std::vector<int> origin;
+    if (!detail::cut_to_disk(cg, &origin, &topo)) return false;
+    std::vector<Vec2d> start;
+    if (!start_uv.empty()) {
+      for (int v : origin) start.push_back(start_uv[v]);
+      detail::open_slits(cg, origin, start);
+      // A tube (two boundary loops, slit lengthwise): the uncut embedding flattens it onto
+      // itself. Geodesics on the slit chart go around the slit, so its own embedding unrolls it.
+      const bool tube = topo.boundary_loops().size() == 2;
+      if (tube && flipped_fraction(cg, start) > 0.25)
+        start = detail::isomap_uv(embed(cg, out.times, landmarks_for(cg, g.faces)));
+    }
+    detail::ChartParam p = detail::parameterize(cg, start, po);
+    out.times.optimization += p.optimize_seconds;
+    if (!p.accepted) return false;
+    out.accepted = true;
+    out.chart.geometry = std::move(cg);
+    out.chart.param = std::move(p);
+    return true;
+  }
+
+  Atlas assemble(const std::vector<DoneChart>& charts) const {
+    Atlas a;
+    a.face_chart.assign(mesh_.num_faces(), -1);
+    a.face_uvs.assign(mesh_.num_faces(), Face{0, 0, 0});
+    for (int c = 0; c < static_cast<int>(charts.size()); ++c) {
+      const auto& g = charts[c].geometry;
+      const auto& p = charts[c].param;
+      const int offset = static_cast<int>(a.uvs.size());
+      a.uvs.insert(a.uvs.end(), p.uv.begin(), p.uv.end());
+      for (int f = 0; f < g.num_faces(); ++f) {
+        const int pf = g.faces[f];
+        a.face_chart[pf] = c;
+        // Chart triangles keep the parent's corner order, so corner k matches.
+        for (int k = 0; k < 3; ++k) a.face_uvs[pf][k] = offset + g.tris[f][k];
+      }
+      ChartInfo info;
+      info.faces = g.num_faces();
+      for (const Face& t : g.tris) info.area_3d += triangle_area(g.positions[t[0]], g.positions[t[1]], g.positions[t[2]]);
+      info.l2 = p.l2;
+      info.linf = p.linf;
+      a.charts.push_back(info);
+    }
+    return a;
+  }
+
+  const Mesh& mesh_;
+  const AtlasOptions& o_;
+  const Progress& progress_;
+  Topology topo_;
+  std::vector<int> component_vertices_;  // referenced vertices per mesh component
+  detail::SplitOptions split_;
+  detail::ParamOptions param_;
+  StageTimes times_;
+  int splits_ = 0;
+  int charts_before_merge_ = 0;
+  long long accepted_faces_ = 0;
+};
+
+}  // namespace
+
+void validate_options(const AtlasOptions& o) {
+  auto bad = [](const std::string& m) { throw InputError("", m); };
+  if (!(o.max_l2 >= 1.0) || !std::isfinite(o.max_l2)) bad("--max-l2 must be a number >= 1 (1 is an isometry)");
+  if (!(o.max_linf >= 1.0) || !std::isfinite(o.max_linf)) bad("--max-linf must be a number >= 1");
+  if (o.max_charts < 0) bad("--max-charts must be >= 0");
+  if (o.landmarks < 3) bad("--landmarks must be >= 3");
+  if (!(o.alpha >= 0 && o.alpha <= 1)) bad("--alpha must be in [0, 1]");
+  if (!(o.medial_fraction > 0 && o.medial_fraction < 1)) bad("medial fraction must be in (0, 1)");
+  if (!(o.merge_max_fraction >= 0 && o.merge_max_fraction <= 1)) bad("merge fraction must be in [0, 1]");
+  if (o.optimize_passes < 0) bad("optimize passes must be >= 0");
+  if (o.pack.width < 8 || o.pack.height < 8 || o.pack.width > 65536 || o.pack.height > 65536)
+    bad("--width and --height must be between 8 and 65536 texels");
+  if (o.pack.gutter < 0 || o.pack.gutter > 64) bad("--gutter must be between 0 and 64 texels");
+}
+
+Mesh Atlas::apply_to(const Mesh& mesh) const {
+  Mesh m = mesh;
+  m.uvs = uvs;
+  m.face_uvs = face_uvs;
+  m.face_groups = face_chart;
+  return m;
+}
+
+PackResult pack_atlas(const Mesh& mesh, Atlas& atlas, const PackOptions& options, const Progress& progress) {
+  // Gather each chart's corners into its own small mesh for the packer.
+  const int nc = atlas.num_charts();
+  std::vector<PackChart> charts(nc);
+  std::vector<std::vector<int>> chart_uv_ids(nc);
+  std::vector<int> local(atlas.uvs.size(), -1);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const int c = atlas.face_chart[f];
+    Face t;
+    for (int k = 0; k < 3; ++k) {
+      const int u = atlas.face_uvs[f][k];
+      if (local[u] < 0) {
+        local[u] = static_cast<int>(chart_uv_ids[c].size());
+        chart_uv_ids[c].push_back(u);
+        charts[c].uv.push_back(atlas.uvs[u]);
+      }
+      t[k] = local[u];
+    }
+    charts[c].faces.push_back(t);
+    charts[c].area_3d += triangle_area(mesh.positions[mesh.faces[f][0]], mesh.positions[mesh.faces[f][1]],
+                                       mesh.positions[mesh.faces[f][2]]);
+  }
+  PackResult r = pack_charts(charts, options, progress);
+  for (int c = 0; c < nc; ++c)
+    for (size_t i = 0; i < chart_uv_ids[c].size(); ++i) atlas.uvs[chart_uv_ids[c][i]] = charts[c].uv[i];
+
+  // Whole-atlas figures, measured on the final texture coordinates.
+  const Mesh m = atlas.apply_to(mesh);
+  const StretchStats st = measure_stretch(m);
+  atlas.stats.charts = nc;
+  atlas.stats.l2 = st.l2;
+  atlas.stats.linf = st.linf;
+  atlas.stats.flipped = st.flipped;
+  atlas.stats.overlapping_pairs = static_cast<long long>(overlapping_uv_pairs(m).size());
+  atlas.stats.packing_ratio = r.packing_ratio;
+  return r;
+}
+
+Atlas build_atlas(const Mesh& mesh, const AtlasOptions& options, const Progress& progress) {
+  validate_options(options);
+  if (mesh.faces.empty()) throw InputError("", "mesh has no faces");
+  Builder b(mesh, options, progress);
+  return b.run();
+}
+
+}  // namespace isochart

@@ -1,0 +1,85 @@
+#pragma once
+// Internal: one chart's geometry, parameterization and acceptance test (Iso-charts §3, §6).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "isochart/mesh.h"
+
+namespace isochart {
+
+struct Embedding;
+
+namespace detail {
+
+/// A chart as its own small mesh. After cut_to_disk some parent vertices appear more than once.
+struct ChartGeometry {
+  std::vector<int> faces;          ///< parent face ids, in chart face order
+  std::vector<Vec3d> positions;    ///< chart vertices
+  std::vector<Face> tris;          ///< chart-local triangles
+  std::vector<int> vertex_parent;  ///< chart vertex → parent vertex
+  int num_vertices() const { return static_cast<int>(positions.size()); }
+  int num_faces() const { return static_cast<int>(tris.size()); }
+};
+
+ChartGeometry make_chart(const Mesh& mesh, const std::vector<int>& faces);
+
+/// Cuts a genus-0 chart with several boundary loops into a disk by slitting it along shortest
+/// edge paths that join every loop to the first one (the chart keeps one piece; UVAtlas's
+/// "make the chart simple" step). Returns false when the chart is not genus 0 with ≥ 1 loop.
+/// `origin` (if given) receives, for every vertex after the cut, the vertex it was copied from.
+/// `topo` may pass g's current topology to save rebuilding it.
+bool cut_to_disk(ChartGeometry& g, std::vector<int>* origin = nullptr, const Topology* topo = nullptr);
+
+/// Opens zero-width slits in a start parameterization of a cut chart: every vertex sharing its
+/// origin with another moves slightly into its own triangles, so the boundary starts simple.
+void open_slits(const ChartGeometry& g, const std::vector<int>& origin, std::vector<Vec2d>& uv);
+
+/// Duplicates vertices along the marked edges (a flag per Topology edge id of g) so the mesh
+/// opens there; vertices whose faces form several fans are split too. `origin` as above.
+void cut_along_edges(ChartGeometry& g, const std::vector<char>& cut_edge, std::vector<int>* origin = nullptr,
+                     const Topology* topo = nullptr);
+
+/// g's topology, after giving each fan of a pinched (non-manifold) vertex its own copy.
+Topology chart_topology(ChartGeometry& g);
+
+struct ParamOptions {
+  double max_l2 = 1.1;
+  double max_linf = 5.0;
+  int optimize_passes = 6;
+  std::uint64_t seed = 1;
+  /// Try an LSCM start when the given start fails by folding, overlap or a narrow miss.
+  bool lscm_fallback = true;
+};
+
+struct ChartParam {
+  std::vector<Vec2d> uv;  ///< per chart vertex; empty when no valid map was found
+  double l2 = 0, linf = 0;
+  int flipped = 0;
+  bool overlaps = false;
+  bool accepted = false;
+  std::string method;     ///< which initialization produced it ("isomap", "lscm", "triangle")
+  double initial_l2 = 0;  ///< stretch of the start, before optimization
+  double initial_flip_fraction = 0;  ///< flipped fraction of the start, before untangling
+  double optimize_seconds = 0;
+};
+
+/// Parameterizes a disk chart, starting from `isomap_uv` (the first two IsoMap coordinates per
+/// chart vertex; may be empty) and, when that fails by folding, overlap or a narrow miss, from
+/// LSCM; each start is untangled and stretch-optimized. Accepted when it has no flip, no
+/// self-overlap and meets both bounds. Returns the best attempt.
+ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& isomap_uv, const ParamOptions& o);
+
+/// The first two embedding coordinates per vertex (empty when the embedding has fewer than two).
+std::vector<Vec2d> isomap_uv(const Embedding& e);
+
+/// Least squares conformal map (Lévy et al. 2002) with the two farthest boundary vertices pinned.
+/// Returns false if the system cannot be solved.
+bool lscm(const ChartGeometry& g, std::vector<Vec2d>& uv);
+
+/// Accepted = disk topology (checked by the caller), no flip, no overlap, both bounds met.
+void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o);
+
+}  // namespace detail
+}  // namespace isochart

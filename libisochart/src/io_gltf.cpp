@@ -1,0 +1,578 @@
+// glTF 2.0 (.gltf / .glb) through tinygltf: reader (triangles, strips and fans of every mesh
+// reached from the default scene, node transforms applied) and glb writer.
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <sstream>
+#include <tuple>
+#include <unordered_map>
+
+#include "io_internal.h"
+#include "isochart/error.h"
+
+namespace isochart::io_detail {
+
+namespace {
+
+using Mat4 = std::array<double, 16>;  // column-major, as glTF stores it
+
+constexpr Mat4 kIdentity = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+
+Mat4 multiply(const Mat4& a, const Mat4& b) {
+  Mat4 r{};
+  for (int c = 0; c < 4; ++c)
+    for (int rr = 0; rr < 4; ++rr) {
+      double s = 0;
+      for (int k = 0; k < 4; ++k) s += a[k * 4 + rr] * b[c * 4 + k];
+      r[c * 4 + rr] = s;
+    }
+  return r;
+}
+
+Mat4 local_transform(const tinygltf::Node& n) {
+  if (n.matrix.size() == 16) {
+    Mat4 m;
+    std::copy(n.matrix.begin(), n.matrix.end(), m.begin());
+    return m;
+  }
+  const double tx = n.translation.size() == 3 ? n.translation[0] : 0;
+  const double ty = n.translation.size() == 3 ? n.translation[1] : 0;
+  const double tz = n.translation.size() == 3 ? n.translation[2] : 0;
+  double qx = 0, qy = 0, qz = 0, qw = 1;
+  if (n.rotation.size() == 4) {
+    qx = n.rotation[0], qy = n.rotation[1], qz = n.rotation[2], qw = n.rotation[3];
+    const double len = std::sqrt(qx * qx + qy * qy + qz * qz + qw * qw);
+    if (len > 0) qx /= len, qy /= len, qz /= len, qw /= len;
+  }
+  const double sx = n.scale.size() == 3 ? n.scale[0] : 1;
+  const double sy = n.scale.size() == 3 ? n.scale[1] : 1;
+  const double sz = n.scale.size() == 3 ? n.scale[2] : 1;
+  // T * R * S, column-major.
+  const double r00 = 1 - 2 * (qy * qy + qz * qz), r01 = 2 * (qx * qy - qz * qw),
+               r02 = 2 * (qx * qz + qy * qw);
+  const double r10 = 2 * (qx * qy + qz * qw), r11 = 1 - 2 * (qx * qx + qz * qz),
+               r12 = 2 * (qy * qz - qx * qw);
+  const double r20 = 2 * (qx * qz - qy * qw), r21 = 2 * (qy * qz + qx * qw),
+               r22 = 1 - 2 * (qx * qx + qy * qy);
+  return {r00 * sx, r10 * sx, r20 * sx, 0, r01 * sy, r11 * sy, r21 * sy, 0,
+          r02 * sz, r12 * sz, r22 * sz, 0, tx,       ty,       tz,       1};
+}
+
+double det3(const Mat4& m) {
+  return m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) +
+         m[8] * (m[1] * m[6] - m[5] * m[2]);
+}
+
+// Inverse transpose of the upper 3x3 (the cofactor matrix, up to the determinant's scale,
+// which normalization removes; its sign is kept so mirrored normals still point outward).
+std::array<double, 9> normal_matrix(const Mat4& m) {
+  const double a = m[0], b = m[4], c = m[8], d = m[1], e = m[5], f = m[9], g = m[2], h = m[6], i = m[10];
+  const double s = det3(m) < 0 ? -1 : 1;
+  // Rows of the cofactor matrix.
+  return {s * (e * i - f * h), s * (f * g - d * i), s * (d * h - e * g),
+          s * (c * h - b * i), s * (a * i - c * g), s * (b * g - a * h),
+          s * (b * f - c * e), s * (c * d - a * f), s * (a * e - b * d)};
+}
+
+// A bounds-checked view of an accessor's elements.
+struct AccessorView {
+  const unsigned char* data = nullptr;  // null: all zeros (accessor without bufferView)
+  std::size_t count = 0;
+  std::size_t stride = 0;
+  int component_type = TINYGLTF_COMPONENT_TYPE_FLOAT;
+  int components = 1;
+  bool normalized = false;
+
+  double get(std::size_t i, int c) const {
+    if (!data) return 0;
+    const unsigned char* p = data + i * stride;
+    switch (component_type) {
+      case TINYGLTF_COMPONENT_TYPE_BYTE: {
+        std::int8_t x;
+        std::memcpy(&x, p + c, 1);
+        return normalized ? std::max(x / 127.0, -1.0) : x;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return normalized ? p[c] / 255.0 : p[c];
+      case TINYGLTF_COMPONENT_TYPE_SHORT: {
+        std::int16_t x;
+        std::memcpy(&x, p + 2 * c, 2);
+        return normalized ? std::max(x / 32767.0, -1.0) : x;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+        std::uint16_t x;
+        std::memcpy(&x, p + 2 * c, 2);
+        return normalized ? x / 65535.0 : x;
+      }
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: {
+        std::uint32_t x;
+        std::memcpy(&x, p + 4 * c, 4);
+        return x;
+      }
+      case TINYGLTF_COMPONENT_TYPE_INT: {
+        std::int32_t x;
+        std::memcpy(&x, p + 4 * c, 4);
+        return x;
+      }
+      default: {
+        float x;
+        std::memcpy(&x, p + 4 * c, 4);
+        return x;
+      }
+    }
+  }
+};
+
+class GltfReader {
+ public:
+  GltfReader(const std::string& path, const tinygltf::Model& model, const LoadOptions& options)
+      : path_(path), model_(model), options_(options) {
+    raw_.source = path;
+  }
+
+  RawMesh read() {
+    for (const auto& ext : model_.extensionsRequired)
+      if (ext == "KHR_draco_mesh_compression" || ext == "EXT_meshopt_compression")
+        fail("requires the unsupported extension " + quoted(ext));
+    visited_.assign(model_.nodes.size(), 0);
+    if (model_.scenes.empty()) {
+      // No scene to follow: every mesh once, untransformed.
+      for (std::size_t m = 0; m < model_.meshes.size(); ++m) add_mesh(static_cast<int>(m), kIdentity);
+    } else {
+      const int scene = model_.defaultScene >= 0 ? model_.defaultScene : 0;
+      if (scene >= static_cast<int>(model_.scenes.size()))
+        fail("default scene " + std::to_string(scene) + " does not exist");
+      for (int n : model_.scenes[scene].nodes) visit(n, kIdentity);
+    }
+    finish();
+    return std::move(raw_);
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& message) const { throw InputError(path_, message); }
+
+  void visit(int node, const Mat4& parent) {
+    if (node < 0 || node >= static_cast<int>(model_.nodes.size()))
+      fail("node " + std::to_string(node) + " does not exist");
+    // glTF nodes form a forest; a second visit means a cycle or a shared child, either of
+    // which could make the traversal endless or exponential.
+    if (visited_[node])
+      fail("node " + std::to_string(node) + " is reached twice (a cycle or a node with two parents)");
+    visited_[node] = 1;
+    const tinygltf::Node& n = model_.nodes[node];
+    const Mat4 world = multiply(parent, local_transform(n));
+    if (n.mesh >= 0) add_mesh(n.mesh, world);
+    for (int c : n.children) visit(c, world);
+  }
+
+  AccessorView view(int index, const std::string& what, std::initializer_list<int> types,
+                    bool need_data) const {
+    if (index < 0 || index >= static_cast<int>(model_.accessors.size()))
+      fail(what + ": accessor " + std::to_string(index) + " does not exist");
+    const tinygltf::Accessor& a = model_.accessors[index];
+    const std::string name = what + " (accessor " + std::to_string(index) + ")";
+    if (a.sparse.isSparse) fail(name + " is sparse, which is not supported");
+    if (std::find(types.begin(), types.end(), a.type) == types.end()) fail(name + " has the wrong type");
+    AccessorView v;
+    v.count = a.count;
+    v.component_type = a.componentType;
+    v.components = tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type));
+    v.normalized = a.normalized;
+    const int csize = tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(a.componentType));
+    if (csize <= 0 || csize == 8)
+      fail(name + " has an unsupported component type " + std::to_string(a.componentType));
+    const std::size_t elem = static_cast<std::size_t>(csize) * v.components;
+    if (a.bufferView < 0) {
+      // All zeros by the spec; allowed only where the count is bounded by real data.
+      if (need_data) fail(name + " has no bufferView");
+      return v;
+    }
+    if (a.bufferView >= static_cast<int>(model_.bufferViews.size()))
+      fail(name + ": bufferView " + std::to_string(a.bufferView) + " does not exist");
+    const tinygltf::BufferView& bv = model_.bufferViews[a.bufferView];
+    if (bv.buffer < 0 || bv.buffer >= static_cast<int>(model_.buffers.size()))
+      fail(name + ": buffer " + std::to_string(bv.buffer) + " does not exist");
+    const auto& buf = model_.buffers[bv.buffer].data;
+    if (bv.byteOffset > buf.size() || bv.byteLength > buf.size() - bv.byteOffset)
+      fail(name + ": bufferView " + std::to_string(a.bufferView) + " runs past the end of its buffer");
+    v.stride = bv.byteStride ? bv.byteStride : elem;
+    if (v.stride < elem) fail(name + ": byteStride is smaller than an element");
+    if (a.count > 0 &&
+        (a.byteOffset > bv.byteLength || a.count - 1 > (bv.byteLength - a.byteOffset) / v.stride ||
+         (a.count - 1) * v.stride + elem > bv.byteLength - a.byteOffset))
+      fail(name + " runs past the end of its bufferView (truncated or corrupt file)");
+    v.data = buf.data() + bv.byteOffset + a.byteOffset;
+    return v;
+  }
+
+  void add_mesh(int mesh, const Mat4& world) {
+    if (mesh < 0 || mesh >= static_cast<int>(model_.meshes.size()))
+      fail("mesh " + std::to_string(mesh) + " does not exist");
+    const bool mirror = det3(world) < 0;
+    const auto nm = normal_matrix(world);
+    // Primitives of one node that name the same attribute accessors share their vertices.
+    std::map<std::array<int, 4>, std::pair<int, int>> shared;  // accessors → (vertex base, uv base)
+    const auto& prims = model_.meshes[mesh].primitives;
+    for (std::size_t pi = 0; pi < prims.size(); ++pi) {
+      const tinygltf::Primitive& p = prims[pi];
+      const std::string what = "mesh " + std::to_string(mesh) + " primitive " + std::to_string(pi);
+      const int mode = p.mode < 0 ? TINYGLTF_MODE_TRIANGLES : p.mode;
+      if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+          mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+        ++skipped_primitives_;
+        continue;
+      }
+      auto attr = [&](const char* name) {
+        const auto it = p.attributes.find(name);
+        return it == p.attributes.end() ? -1 : it->second;
+      };
+      const std::array<int, 4> ids = {attr("POSITION"), attr("NORMAL"), attr("TEXCOORD_0"), attr("COLOR_0")};
+      if (ids[0] < 0) fail(what + " has no POSITION attribute");
+      const AccessorView pos = view(ids[0], what + " POSITION", {TINYGLTF_TYPE_VEC3}, true);
+      const std::size_t nv = pos.count;
+      auto check_count = [&](const AccessorView& v, const char* name) {
+        if (v.count != nv)
+          fail(what + " " + name + " has " + std::to_string(v.count) + " values for " + std::to_string(nv) +
+               " vertices");
+        return v;
+      };
+      int base = 0, uv_base = -1;
+      const auto found = shared.find(ids);
+      if (found != shared.end()) {
+        std::tie(base, uv_base) = found->second;
+      } else {
+        base = static_cast<int>(raw_.positions.size());
+        // Instancing can repeat a large vertex array; more than three vertices per allowed
+        // face cannot be a mesh within the limit.
+        if (static_cast<long long>(base) + static_cast<long long>(nv) > 3 * options_.max_faces + 3)
+          fail("has more than " + std::to_string(3 * options_.max_faces + 3) +
+               " vertices (3 per face of the limit of " + std::to_string(options_.max_faces) + " faces)");
+        for (std::size_t i = 0; i < nv; ++i) {
+          const double x = pos.get(i, 0), y = pos.get(i, 1), z = pos.get(i, 2);
+          raw_.positions.push_back({world[0] * x + world[4] * y + world[8] * z + world[12],
+                                    world[1] * x + world[5] * y + world[9] * z + world[13],
+                                    world[2] * x + world[6] * y + world[10] * z + world[14]});
+        }
+        normals_.resize(raw_.positions.size());
+        colors_.resize(raw_.positions.size());
+        if (ids[1] >= 0) {
+          const AccessorView n =
+              check_count(view(ids[1], what + " NORMAL", {TINYGLTF_TYPE_VEC3}, false), "NORMAL");
+          for (std::size_t i = 0; i < nv; ++i) {
+            const double x = n.get(i, 0), y = n.get(i, 1), z = n.get(i, 2);
+            normals_[base + i] =
+                normalized(Vec3d{nm[0] * x + nm[1] * y + nm[2] * z, nm[3] * x + nm[4] * y + nm[5] * z,
+                                 nm[6] * x + nm[7] * y + nm[8] * z});
+          }
+          with_normals_ += static_cast<long long>(nv);
+        }
+        if (ids[3] >= 0) {
+          const AccessorView c = check_count(
+              view(ids[3], what + " COLOR_0", {TINYGLTF_TYPE_VEC3, TINYGLTF_TYPE_VEC4}, false), "COLOR_0");
+          for (std::size_t i = 0; i < nv; ++i) colors_[base + i] = {c.get(i, 0), c.get(i, 1), c.get(i, 2)};
+          with_colors_ += static_cast<long long>(nv);
+        }
+        if (ids[2] >= 0) {
+          const AccessorView t =
+              check_count(view(ids[2], what + " TEXCOORD_0", {TINYGLTF_TYPE_VEC2}, false), "TEXCOORD_0");
+          uv_base = static_cast<int>(raw_.uvs.size());
+          // glTF puts the texture origin at the top left, OBJ and we at the bottom left.
+          for (std::size_t i = 0; i < nv; ++i) raw_.uvs.push_back({t.get(i, 0), 1.0 - t.get(i, 1)});
+        }
+        shared.emplace(ids, std::make_pair(base, uv_base));
+      }
+
+      // Corner indices of the primitive, then its triangles.
+      std::vector<std::uint32_t> idx;
+      if (p.indices >= 0) {
+        const AccessorView iv = view(p.indices, what + " indices", {TINYGLTF_TYPE_SCALAR}, true);
+        if (iv.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+            iv.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+            iv.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+          fail(what + " indices have a non-integer component type");
+        idx.resize(iv.count);
+        for (std::size_t i = 0; i < iv.count; ++i) {
+          const double x = iv.get(i, 0);
+          if (x >= static_cast<double>(nv))
+            fail(what + ": index " + std::to_string(static_cast<long long>(x)) + " is out of range (" +
+                 std::to_string(nv) + " vertices)");
+          idx[i] = static_cast<std::uint32_t>(x);
+        }
+      } else {
+        idx.resize(nv);
+        for (std::size_t i = 0; i < nv; ++i) idx[i] = static_cast<std::uint32_t>(i);
+      }
+      const std::size_t n = idx.size();
+      const std::size_t triangles = mode == TINYGLTF_MODE_TRIANGLES ? n / 3 : (n >= 2 ? n - 2 : 0);
+      check_face_limit(path_, static_cast<long long>(raw_.polygons.size() + triangles), options_);
+      const int group = groups_++;
+      auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+        if (mirror) std::swap(b, c);
+        raw_.polygons.push_back(
+            {base + static_cast<int>(a), base + static_cast<int>(b), base + static_cast<int>(c)});
+        raw_.polygon_uvs.push_back(uv_base < 0 ? std::vector<int>{}
+                                               : std::vector<int>{uv_base + static_cast<int>(a),
+                                                                  uv_base + static_cast<int>(b),
+                                                                  uv_base + static_cast<int>(c)});
+        raw_.polygon_groups.push_back(group);
+        with_uvs_ += uv_base < 0 ? 0 : 1;
+      };
+      if (mode == TINYGLTF_MODE_TRIANGLES) {
+        for (std::size_t i = 0; i + 2 < n; i += 3) emit(idx[i], idx[i + 1], idx[i + 2]);
+      } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        // Repeated indices in a strip join its pieces; they are not triangles.
+        for (std::size_t i = 0; i + 2 < n; ++i) {
+          const std::uint32_t a = idx[i], b = idx[i + 1], c = idx[i + 2];
+          if (a == b || b == c || a == c) continue;
+          if (i % 2 == 0)
+            emit(a, b, c);
+          else
+            emit(b, a, c);
+        }
+      } else {
+        for (std::size_t i = 1; i + 1 < n; ++i) emit(idx[0], idx[i], idx[i + 1]);
+      }
+    }
+  }
+
+  // Attributes present on only some primitives: texture coordinates are filled with (0, 0),
+  // normals and colours dropped, each with a warning.
+  void finish() {
+    const long long nv = static_cast<long long>(raw_.positions.size());
+    const long long nf = static_cast<long long>(raw_.polygons.size());
+    if (with_uvs_ == 0) {
+      raw_.uvs.clear();
+      raw_.polygon_uvs.clear();
+    } else if (with_uvs_ < nf) {
+      const int zero = static_cast<int>(raw_.uvs.size());
+      raw_.uvs.push_back({0, 0});
+      for (auto& puv : raw_.polygon_uvs)
+        if (puv.empty()) puv.assign(3, zero);
+      raw_.warnings.push_back(std::to_string(nf - with_uvs_) + " faces have no TEXCOORD_0; they get (0, 0)");
+    }
+    if (with_normals_ == nv && nv > 0)
+      raw_.normals = std::move(normals_);
+    else if (with_normals_ > 0)
+      raw_.warnings.push_back("only some primitives have normals; normals ignored");
+    if (with_colors_ == nv && nv > 0)
+      raw_.colors = std::move(colors_);
+    else if (with_colors_ > 0)
+      raw_.warnings.push_back("only some primitives have colours; colours ignored");
+    if (skipped_primitives_ > 0)
+      raw_.warnings.push_back("ignored " + std::to_string(skipped_primitives_) +
+                              " point and line primitives");
+  }
+
+  const std::string& path_;
+  const tinygltf::Model& model_;
+  const LoadOptions& options_;
+  RawMesh raw_;
+  std::vector<char> visited_;
+  std::vector<Vec3d> normals_, colors_;
+  long long with_normals_ = 0, with_colors_ = 0, with_uvs_ = 0;
+  int groups_ = 0, skipped_primitives_ = 0;
+};
+
+// Images are not needed to read a mesh, so they are not decoded.
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int,
+                void*) {
+  return true;
+}
+
+std::string first_line(const std::string& s) {
+  std::string_view v = s;
+  while (!v.empty() && (v.front() == '\n' || v.front() == ' ')) v.remove_prefix(1);
+  std::string_view line = v.substr(0, v.find('\n'));
+  // nlohmann's messages start with an internal tag such as "[json.exception.parse_error.101] ".
+  if (line.substr(0, 16) == "[json.exception." && line.find("] ") != std::string_view::npos)
+    line.remove_prefix(line.find("] ") + 2);
+  return std::string(line.substr(0, 200));
+}
+
+template <typename T>
+void append_pod(std::vector<unsigned char>& buf, const T& x) {
+  const auto* p = reinterpret_cast<const unsigned char*>(&x);
+  buf.insert(buf.end(), p, p + sizeof(T));
+}
+
+void pad4(std::vector<unsigned char>& buf) {
+  while (buf.size() % 4) buf.push_back(0);
+}
+
+}  // namespace
+
+RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, const LoadOptions& options) {
+  if (data.size() > 0xffffffffu) throw InputError(path, "glTF file is larger than 4 GiB");
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(skip_image, nullptr);
+  tinygltf::Model model;
+  std::string err, warn;
+  const auto slash = path.find_last_of('/');
+  const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
+  bool ok = false;
+  try {
+    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn,
+                                              reinterpret_cast<const unsigned char*>(data.data()),
+                                              static_cast<unsigned int>(data.size()), base_dir)
+                : loader.LoadASCIIFromString(&model, &err, &warn, data.data(),
+                                             static_cast<unsigned int>(data.size()), base_dir);
+  } catch (const std::exception& e) {
+    throw InputError(path, std::string("invalid glTF: ") + first_line(e.what()));
+  }
+  if (!ok)
+    throw InputError(path, "invalid glTF: " + (err.empty() ? std::string("cannot parse") : first_line(err)));
+  return GltfReader(path, model, options).read();
+}
+
+std::string glb_bytes(const Mesh& m, const std::string& texture) {
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "isocharts";
+  std::vector<unsigned char> buf;
+
+  // glTF attributes are per vertex, so a vertex with several UVs (a seam) is split.
+  std::vector<std::pair<int, int>> verts;  // (mesh vertex, uv index or -1)
+  std::unordered_map<long long, std::uint32_t> vid;
+  std::vector<std::array<std::uint32_t, 3>> tris(m.faces.size());
+  for (int f = 0; f < m.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int v = m.faces[f][k], t = m.has_uvs() ? m.face_uvs[f][k] : -1;
+      const long long key = (static_cast<long long>(v) << 32) | static_cast<std::uint32_t>(t);
+      const auto [it, inserted] = vid.emplace(key, static_cast<std::uint32_t>(verts.size()));
+      if (inserted) verts.emplace_back(v, t);
+      tris[f][k] = it->second;
+    }
+
+  auto add_view = [&](std::size_t offset, int target) {
+    tinygltf::BufferView bv;
+    bv.buffer = 0;
+    bv.byteOffset = offset;
+    bv.byteLength = buf.size() - offset;
+    bv.target = target;
+    model.bufferViews.push_back(bv);
+    pad4(buf);
+    return static_cast<int>(model.bufferViews.size()) - 1;
+  };
+  auto add_accessor = [&](int view, int ctype, int type, std::size_t count) {
+    tinygltf::Accessor a;
+    a.bufferView = view;
+    a.componentType = ctype;
+    a.type = type;
+    a.count = count;
+    model.accessors.push_back(a);
+    return static_cast<int>(model.accessors.size()) - 1;
+  };
+  auto add_vec3 = [&](auto&& value) {
+    const std::size_t off = buf.size();
+    for (const auto& vt : verts) {
+      const Vec3d x = value(vt.first);
+      for (int i = 0; i < 3; ++i) append_pod(buf, static_cast<float>(x[i]));
+    }
+    return add_accessor(add_view(off, TINYGLTF_TARGET_ARRAY_BUFFER), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                        TINYGLTF_TYPE_VEC3, verts.size());
+  };
+
+  std::map<std::string, int> attributes;
+  attributes["POSITION"] = add_vec3([&](int v) { return m.positions[v]; });
+  {
+    // The spec requires POSITION bounds.
+    tinygltf::Accessor& a = model.accessors.back();
+    a.minValues.assign(3, verts.empty() ? 0.0 : 1e300);
+    a.maxValues.assign(3, verts.empty() ? 0.0 : -1e300);
+    for (const auto& vt : verts)
+      for (int i = 0; i < 3; ++i) {
+        const double x = static_cast<float>(m.positions[vt.first][i]);
+        a.minValues[i] = std::min(a.minValues[i], x);
+        a.maxValues[i] = std::max(a.maxValues[i], x);
+      }
+  }
+  if (m.has_normals()) attributes["NORMAL"] = add_vec3([&](int v) { return normalized(m.normals[v]); });
+  if (m.has_colors()) attributes["COLOR_0"] = add_vec3([&](int v) { return m.colors[v]; });
+  if (m.has_uvs()) {
+    const std::size_t off = buf.size();
+    for (const auto& vt : verts) {
+      append_pod(buf, static_cast<float>(m.uvs[vt.second].x));
+      append_pod(buf, static_cast<float>(1.0 - m.uvs[vt.second].y));
+    }
+    attributes["TEXCOORD_0"] = add_accessor(add_view(off, TINYGLTF_TARGET_ARRAY_BUFFER),
+                                            TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, verts.size());
+  }
+
+  int material = -1;
+  if (!texture.empty()) {
+    std::string bytes;
+    try {
+      bytes = read_file(texture);
+    } catch (const InputError& e) {
+      throw InputError(texture, std::string("texture ") + e.what());
+    }
+    std::string mime;
+    if (bytes.size() >= 8 && std::memcmp(bytes.data(), "\x89PNG\r\n\x1a\n", 8) == 0)
+      mime = "image/png";
+    else if (bytes.size() >= 3 && std::memcmp(bytes.data(), "\xff\xd8\xff", 3) == 0)
+      mime = "image/jpeg";
+    else
+      throw InputError(texture, "texture is not a PNG or JPEG image");
+    const std::size_t off = buf.size();
+    buf.insert(buf.end(), bytes.begin(), bytes.end());
+    tinygltf::Image image;
+    image.bufferView = add_view(off, 0);
+    image.mimeType = mime;
+    model.images.push_back(image);
+    tinygltf::Sampler sampler;
+    sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
+    sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
+    model.samplers.push_back(sampler);
+    tinygltf::Texture tex;
+    tex.source = 0;
+    tex.sampler = 0;
+    model.textures.push_back(tex);
+    tinygltf::Material mat;
+    mat.name = "material0";
+    mat.pbrMetallicRoughness.baseColorTexture.index = 0;
+    mat.pbrMetallicRoughness.metallicFactor = 0;
+    mat.pbrMetallicRoughness.roughnessFactor = 1;
+    model.materials.push_back(mat);
+    material = 0;
+  }
+
+  // One primitive per face group (ascending ids), all sharing the vertex attributes.
+  std::map<int, std::vector<int>> groups;
+  const bool grouped = m.face_groups.size() == m.faces.size();
+  for (int f = 0; f < m.num_faces(); ++f) groups[grouped ? m.face_groups[f] : 0].push_back(f);
+  tinygltf::Mesh mesh;
+  for (const auto& [g, faces] : groups) {
+    const std::size_t off = buf.size();
+    for (int f : faces)
+      for (int k = 0; k < 3; ++k) append_pod(buf, tris[f][k]);
+    tinygltf::Primitive prim;
+    prim.attributes = attributes;
+    prim.indices = add_accessor(add_view(off, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),
+                                TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, 3 * faces.size());
+    prim.mode = TINYGLTF_MODE_TRIANGLES;
+    prim.material = material;
+    mesh.primitives.push_back(prim);
+  }
+  model.meshes.push_back(mesh);
+  tinygltf::Node node;
+  node.mesh = 0;
+  model.nodes.push_back(node);
+  tinygltf::Scene scene;
+  scene.nodes.push_back(0);
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+  tinygltf::Buffer buffer;
+  buffer.data = std::move(buf);
+  model.buffers.push_back(std::move(buffer));
+
+  tinygltf::TinyGLTF writer;
+  std::ostringstream os;
+  if (!writer.WriteGltfSceneToStream(&model, os, false, true)) throw Error("cannot serialize the glb");
+  return os.str();
+}
+
+}  // namespace isochart::io_detail

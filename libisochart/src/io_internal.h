@@ -1,0 +1,91 @@
+#pragma once
+// Internals of the mesh I/O module: per-format readers and writers, and the small text
+// scanner the text formats share. Not part of the public API.
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+#include "isochart/io.h"
+
+namespace isochart::io_detail {
+
+// ---- Readers: `data` is the whole file; they throw InputError(path, ...) ----
+RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptions& options);
+RawMesh read_off(const std::string& path, std::string_view data, const LoadOptions& options);
+RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptions& options);
+RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, const LoadOptions& options);
+
+// ---- Writers: return the file contents; save_mesh writes them atomically ----
+std::string obj_text(const Mesh& mesh, const std::string& mtl_file, bool write_groups);
+std::string mtl_text(const std::string& texture);
+std::string ply_bytes(const Mesh& mesh, bool binary);
+/// \throw InputError(texture, ...) when the texture cannot be read or is not PNG/JPEG.
+std::string glb_bytes(const Mesh& mesh, const std::string& texture);
+
+/// Whole file contents. \throw InputError for a missing file, a directory, a read error.
+std::string read_file(const std::string& path);
+
+/// A token made safe for a one-line message: control and non-ASCII bytes escaped as \xNN,
+/// long tokens cut (a garbage "line" may be megabytes long).
+std::string quoted(std::string_view token);
+
+/// Throws InputError(path, "line N: message").
+[[noreturn]] void fail_at_line(const std::string& path, long long line, const std::string& message);
+
+/// Throws when a reader is about to hold more faces than options.max_faces allows.
+void check_face_limit(const std::string& path, long long faces, const LoadOptions& options);
+
+/// Lines of a text file, without the line end (LF or CRLF). Rejects NUL bytes, which no
+/// text mesh format contains and which mark a binary file given the wrong extension.
+class LineScanner {
+ public:
+  LineScanner(const std::string& path, std::string_view data) : path_(path), data_(data) {}
+  /// The next line, or false at the end of the data.
+  bool next(std::string_view& line);
+  long long line_number() const { return line_; }
+  /// Bytes not yet scanned.
+  std::size_t remaining() const { return data_.size() - pos_; }
+  /// Offset of the first byte not yet scanned.
+  std::size_t offset() const { return pos_; }
+
+ private:
+  const std::string& path_;
+  std::string_view data_;
+  std::size_t pos_ = 0;
+  long long line_ = 0;
+};
+
+inline bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\v' || c == '\f' || c == '\r';
+}
+
+/// Splits off the next whitespace-separated token; false when none is left.
+inline bool next_token(std::string_view& s, std::string_view& token) {
+  std::size_t i = 0;
+  while (i < s.size() && is_space(s[i])) ++i;
+  if (i == s.size()) {
+    s = {};
+    return false;
+  }
+  std::size_t j = i;
+  while (j < s.size() && !is_space(s[j])) ++j;
+  token = s.substr(i, j - i);
+  s.remove_prefix(j);
+  return true;
+}
+
+/// Parses a whole token as a number (a leading '+' is allowed). nan/inf parse, so that the
+/// caller can name them; out-of-range values and trailing junk do not.
+bool parse_double(std::string_view token, double& value);
+bool parse_int(std::string_view token, long long& value);
+
+/// Parses the next token on a line as a finite number, or throws naming the line and `what`.
+double expect_number(std::string_view& rest, const std::string& path, long long line, const char* what);
+
+/// Appends the shortest text that reads back as exactly `v` (std::to_chars).
+void append_number(std::string& out, double v);
+void append_number(std::string& out, float v);
+void append_number(std::string& out, long long v);
+
+}  // namespace isochart::io_detail

@@ -1,0 +1,326 @@
+// Wavefront OBJ: reader (v with optional colours, vt, vn, f in all four corner forms with
+// relative indices, polygons, g/o groups) and writer (+ MTL).
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <unordered_map>
+
+#include "io_internal.h"
+#include "isochart/error.h"
+
+namespace isochart::io_detail {
+
+namespace {
+
+bool is_identifier(std::string_view s) {
+  for (char c : s) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_';
+    if (!ok) return false;
+  }
+  return !s.empty();
+}
+
+// Statements of the OBJ spec that carry nothing a triangle mesh needs (materials, smoothing,
+// free-form geometry, display attributes).
+bool is_ignored_statement(std::string_view key) {
+  static const char* const names[] = {
+      "s",        "mtllib",     "usemtl",    "usemap", "maplib", "vp",   "cstype", "deg",
+      "bmat",     "step",       "curv",      "curv2",  "surf",   "parm", "trim",   "hole",
+      "scrv",     "sp",         "end",       "con",    "mg",     "lod",  "bevel",  "c_interp",
+      "d_interp", "shadow_obj", "trace_obj", "ctech",  "stech",  "call", "csh"};
+  for (const char* n : names)
+    if (key == n) return true;
+  return false;
+}
+
+// The largest 1-based index seen for one kind of element, with its line, so that forward
+// references (legal in OBJ) are checked once all elements are known.
+struct MaxRef {
+  long long index = 0;
+  long long line = 0;
+};
+
+}  // namespace
+
+RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptions& options) {
+  RawMesh raw;
+  raw.source = path;
+  std::vector<Vec3d> normals_in;   // the vn list
+  std::vector<int> corner_normal;  // per corner of raw.polygons in order, -1 when none
+  std::vector<Vec3d> colors;
+  long long colored = 0, corners_with_normal = 0;
+  std::vector<std::vector<int>> polygon_uvs;
+  long long faces_with_uv = 0;
+  // Group ids in order of first use by a face, so that a name with no faces takes none.
+  std::unordered_map<std::string, int> group_ids;
+  std::vector<int> groups;
+  std::string group_name;
+  int current_group = -1;  // id of group_name, -1 until a face uses it
+  bool saw_group = false;
+  MaxRef max_v, max_vt, max_vn;
+  long long ignored_elements = 0, unknown_statements = 0, first_unknown_line = 0;
+  std::string first_unknown;
+
+  LineScanner lines(path, data);
+  std::string_view line;
+  std::vector<int> poly, poly_uv;
+  while (lines.next(line)) {
+    std::string_view rest = line, key;
+    if (!next_token(rest, key) || key[0] == '#') continue;
+    const long long ln = lines.line_number();
+
+    if (key == "v") {
+      double c[7];
+      int n = 0;
+      std::string_view tok;
+      while (next_token(rest, tok) && tok[0] != '#') {
+        if (n == 7 || !parse_double(tok, c[n])) {
+          if (n < 7) fail_at_line(path, ln, quoted(tok) + " is not a number");
+          fail_at_line(path, ln, "too many numbers after 'v' (expected x y z, x y z w or x y z r g b)");
+        }
+        if (!std::isfinite(c[n])) fail_at_line(path, ln, "coordinate " + quoted(tok) + " is not finite");
+        ++n;
+      }
+      if (n < 3) fail_at_line(path, ln, "expected 3 coordinates after 'v'");
+      if (n != 3 && n != 4 && n != 6)
+        fail_at_line(
+            path, ln,
+            "expected x y z, x y z w or x y z r g b after 'v', found " + std::to_string(n) + " numbers");
+      raw.positions.push_back({c[0], c[1], c[2]});
+      if (n == 6) {
+        colors.resize(raw.positions.size());
+        colors.back() = {c[3], c[4], c[5]};
+        ++colored;
+      }
+    } else if (key == "vt") {
+      Vec2d uv;
+      uv.x = expect_number(rest, path, ln, "texture coordinate after 'vt'");
+      std::string_view tok;
+      if (next_token(rest, tok) && tok[0] != '#') {
+        if (!parse_double(tok, uv.y)) fail_at_line(path, ln, quoted(tok) + " is not a number");
+        if (!std::isfinite(uv.y))
+          fail_at_line(path, ln, "texture coordinate " + quoted(tok) + " is not finite");
+      }
+      raw.uvs.push_back(uv);
+    } else if (key == "vn") {
+      Vec3d nrm;
+      for (int i = 0; i < 3; ++i) nrm[i] = expect_number(rest, path, ln, "3 coordinates after 'vn'");
+      normals_in.push_back(nrm);
+    } else if (key == "f" || key == "fo") {
+      poly.clear();
+      poly_uv.clear();
+      int with_uv = 0;
+      std::string_view tok;
+      while (next_token(rest, tok) && tok[0] != '#') {
+        // v, v/vt, v//vn or v/vt/vn; a third slash leaves "vn/x" in parts[2], which then
+        // fails to parse.
+        std::string_view parts[3], t = tok;
+        int np = 0;
+        for (;;) {
+          const std::size_t slash = t.find('/');
+          if (np == 2 || slash == std::string_view::npos) {
+            parts[np++] = t;
+            break;
+          }
+          parts[np++] = t.substr(0, slash);
+          t.remove_prefix(slash + 1);
+        }
+        auto resolve = [&](std::string_view s, std::size_t count, const char* what, MaxRef& max) {
+          long long i = 0;
+          if (!parse_int(s, i))
+            fail_at_line(path, ln,
+                         quoted(tok) + " is not a face corner (expected v, v/vt, v//vn or v/vt/vn)");
+          if (i == 0)
+            fail_at_line(path, ln, std::string(what) + " index 0 is invalid (OBJ indices start at 1)");
+          if (i < 0) {
+            if (-i > static_cast<long long>(count))
+              fail_at_line(path, ln,
+                           "relative " + std::string(what) + " index " + std::to_string(i) +
+                               " reaches before the first " + what + " (only " + std::to_string(count) +
+                               " so far)");
+            return static_cast<int>(static_cast<long long>(count) + i);
+          }
+          if (i > INT_MAX)
+            fail_at_line(path, ln, std::string(what) + " index " + std::to_string(i) + " is out of range");
+          if (i > max.index) max = {i, ln};
+          return static_cast<int>(i - 1);
+        };
+        if (parts[0].empty())
+          fail_at_line(path, ln, quoted(tok) + " is not a face corner (expected v, v/vt, v//vn or v/vt/vn)");
+        poly.push_back(resolve(parts[0], raw.positions.size(), "vertex", max_v));
+        if (np > 1 && !parts[1].empty()) {
+          poly_uv.push_back(resolve(parts[1], raw.uvs.size(), "texture coordinate", max_vt));
+          ++with_uv;
+        }
+        const bool has_n = np > 2 && !parts[2].empty();
+        corner_normal.push_back(has_n ? resolve(parts[2], normals_in.size(), "normal", max_vn) : -1);
+        corners_with_normal += has_n ? 1 : 0;
+      }
+      if (poly.size() < 3)
+        fail_at_line(path, ln,
+                     "face has " + std::to_string(poly.size()) + " corners; a face needs at least 3");
+      if (with_uv != 0 && with_uv != static_cast<int>(poly.size()))
+        fail_at_line(path, ln, "face mixes corners with and without texture coordinates");
+      if (static_cast<long long>(raw.polygons.size()) >= options.max_faces)
+        check_face_limit(path, static_cast<long long>(raw.polygons.size()) + 1, options);
+      if (current_group < 0)  // faces before any g/o form the unnamed group
+        current_group = group_ids.emplace(group_name, static_cast<int>(group_ids.size())).first->second;
+      groups.push_back(current_group);
+      raw.polygons.push_back(poly);
+      polygon_uvs.push_back(poly_uv);
+      faces_with_uv += with_uv ? 1 : 0;
+    } else if (key == "g" || key == "o") {
+      // The rest of the line is the name; "g" alone is the default group.
+      std::size_t i = 0;
+      while (i < rest.size() && is_space(rest[i])) ++i;
+      std::string name(rest.substr(i));
+      while (!name.empty() && is_space(name.back())) name.pop_back();
+      saw_group = true;
+      group_name = std::move(name);
+      current_group = -1;
+    } else if (key == "l" || key == "p") {
+      ++ignored_elements;
+    } else if (is_ignored_statement(key)) {
+      // Nothing a triangle mesh needs.
+    } else if (is_identifier(key) && key.size() <= 32) {
+      if (unknown_statements++ == 0) {
+        first_unknown = std::string(key);
+        first_unknown_line = ln;
+      }
+    } else {
+      fail_at_line(path, ln, quoted(key) + " is not an OBJ statement");
+    }
+  }
+
+  auto check_max = [&](const MaxRef& max, std::size_t count, const char* what, const char* plural) {
+    if (max.index > static_cast<long long>(count))
+      fail_at_line(path, max.line,
+                   std::string(what) + " index " + std::to_string(max.index) +
+                       " is out of range (the file has " + std::to_string(count) + " " + plural + ")");
+  };
+  check_max(max_v, raw.positions.size(), "vertex", "vertices");
+  check_max(max_vt, raw.uvs.size(), "texture coordinate", "texture coordinates");
+  check_max(max_vn, normals_in.size(), "normal", "normals");
+
+  if (colored > 0 && colored == static_cast<long long>(raw.positions.size())) {
+    // Exporters write colours either in [0, 1] or in [0, 255].
+    double max_c = 0;
+    for (const auto& c : colors) max_c = std::max({max_c, c.x, c.y, c.z});
+    if (max_c > 1)
+      for (auto& c : colors) c /= 255.0;
+    raw.colors = std::move(colors);
+  } else if (colored > 0) {
+    raw.warnings.push_back("only " + std::to_string(colored) + " of " + std::to_string(raw.positions.size()) +
+                           " vertices have colours; colours ignored");
+  }
+
+  if (faces_with_uv > 0) {
+    const long long missing = static_cast<long long>(raw.polygons.size()) - faces_with_uv;
+    if (missing > 0) {
+      const int zero = static_cast<int>(raw.uvs.size());
+      raw.uvs.push_back({0, 0});
+      for (std::size_t f = 0; f < polygon_uvs.size(); ++f)
+        if (polygon_uvs[f].empty()) polygon_uvs[f].assign(raw.polygons[f].size(), zero);
+      raw.warnings.push_back(std::to_string(missing) + " faces have no texture coordinates; they get (0, 0)");
+    }
+    raw.polygon_uvs = std::move(polygon_uvs);
+  } else {
+    raw.uvs.clear();
+  }
+
+  const long long corners = static_cast<long long>(corner_normal.size());
+  if (corners_with_normal > 0 && corners_with_normal == corners) {
+    // OBJ normals are per corner; the mesh keeps one per vertex, the normalized average of
+    // the normals its corners name (hard edges are smoothed).
+    raw.normals.assign(raw.positions.size(), Vec3d{});
+    std::size_t c = 0;
+    for (const auto& p : raw.polygons)
+      for (int v : p) raw.normals[v] += normalized(normals_in[corner_normal[c++]]);
+    for (auto& n : raw.normals) n = normalized(n);
+  } else if (corners_with_normal > 0) {
+    raw.warnings.push_back("only " + std::to_string(corners_with_normal) + " of " + std::to_string(corners) +
+                           " face corners have normals; normals ignored");
+  }
+
+  if (saw_group) raw.polygon_groups = std::move(groups);
+  if (ignored_elements > 0)
+    raw.warnings.push_back("ignored " + std::to_string(ignored_elements) +
+                           " line and point elements ('l', 'p')");
+  if (unknown_statements > 0)
+    raw.warnings.push_back("ignored " + std::to_string(unknown_statements) +
+                           " unsupported statements (first: " + quoted(first_unknown) + " on line " +
+                           std::to_string(first_unknown_line) + ")");
+  return raw;
+}
+
+std::string mtl_text(const std::string& texture) {
+  return "# isocharts\nnewmtl material0\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\nmap_Kd " + texture +
+         "\n";
+}
+
+std::string obj_text(const Mesh& m, const std::string& mtl_file, bool write_groups) {
+  std::string out;
+  out.reserve(m.positions.size() * 48 + m.uvs.size() * 32 + m.faces.size() * 40);
+  out += "# isocharts\n";
+  if (!mtl_file.empty()) out += "mtllib " + mtl_file + "\n";
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    out += "v";
+    for (int i = 0; i < 3; ++i) {
+      out += ' ';
+      append_number(out, m.positions[v][i]);
+    }
+    if (m.has_colors())
+      for (int i = 0; i < 3; ++i) {
+        out += ' ';
+        append_number(out, m.colors[v][i]);
+      }
+    out += '\n';
+  }
+  if (m.has_uvs())
+    for (const auto& uv : m.uvs) {
+      out += "vt ";
+      append_number(out, uv.x);
+      out += ' ';
+      append_number(out, uv.y);
+      out += '\n';
+    }
+  if (m.has_normals())
+    for (const auto& n : m.normals) {
+      out += "vn";
+      for (int i = 0; i < 3; ++i) {
+        out += ' ';
+        append_number(out, n[i]);
+      }
+      out += '\n';
+    }
+  if (!mtl_file.empty()) out += "usemtl material0\n";
+  const bool groups = write_groups && m.face_groups.size() == m.faces.size();
+  bool first = true;
+  int last_group = 0;
+  for (int f = 0; f < m.num_faces(); ++f) {
+    if (groups && (first || m.face_groups[f] != last_group)) {
+      last_group = m.face_groups[f];
+      out += "g chart";
+      append_number(out, static_cast<long long>(last_group));
+      out += '\n';
+    }
+    first = false;
+    out += 'f';
+    for (int k = 0; k < 3; ++k) {
+      out += ' ';
+      append_number(out, static_cast<long long>(m.faces[f][k]) + 1);
+      if (m.has_uvs() || m.has_normals()) {
+        out += '/';
+        if (m.has_uvs()) append_number(out, static_cast<long long>(m.face_uvs[f][k]) + 1);
+        if (m.has_normals()) {
+          out += '/';
+          append_number(out, static_cast<long long>(m.faces[f][k]) + 1);
+        }
+      }
+    }
+    out += '\n';
+  }
+  return out;
+}
+
+}  // namespace isochart::io_detail

@@ -1,0 +1,518 @@
+#include "isochart/optimize.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "rng.h"
+
+namespace isochart {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The 3D triangle in its own orthonormal frame: q0 = (0,0), q1 = (x1,0), q2 = (x2,y2).
+struct FlatTriangle {
+  double x1, x2, y2;
+  double area;  // 3D area
+};
+
+FlatTriangle flatten(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  FlatTriangle t{};
+  const Vec3d e1 = b - a, e2 = c - a;
+  const double l1 = norm(e1);
+  t.area = 0.5 * norm(cross(e1, e2));
+  if (l1 <= 0) return t;
+  const Vec3d u = e1 / l1;
+  t.x1 = l1;
+  t.x2 = dot(e2, u);
+  t.y2 = std::sqrt(std::max(squared_norm(e2) - t.x2 * t.x2, 0.0));
+  return t;
+}
+
+// Metric tensor entries of the texture → surface map: a = Ss·Ss, b = Ss·St, c = St·St.
+// Returns false for flipped or degenerate texture triangles.
+inline bool metric(const FlatTriangle& q, const Vec2d& p0, const Vec2d& p1, const Vec2d& p2, double& a,
+                   double& b, double& c, double& area2d) {
+  const double d = (p1.x - p0.x) * (p2.y - p0.y) - (p2.x - p0.x) * (p1.y - p0.y);
+  area2d = 0.5 * d;
+  if (!(d > 0)) return false;
+  const double inv = 1.0 / d;
+  // q0 = (0,0) drops out.
+  const double ssx = (q.x1 * (p2.y - p0.y) + q.x2 * (p0.y - p1.y)) * inv;
+  const double ssy = (q.y2 * (p0.y - p1.y)) * inv;
+  const double stx = (q.x1 * (p0.x - p2.x) + q.x2 * (p1.x - p0.x)) * inv;
+  const double sty = (q.y2 * (p1.x - p0.x)) * inv;
+  a = ssx * ssx + ssy * ssy;
+  b = ssx * stx + ssy * sty;
+  c = stx * stx + sty * sty;
+  return true;
+}
+
+// Normalized max(Γ, 1/γ) given the tensor and k² = (UV area / 3D area) of the whole chart.
+inline double linf_of(double a, double b, double c, double k2) {
+  const double disc = std::sqrt((a - c) * (a - c) + 4 * b * b);
+  const double g2max = 0.5 * (a + c + disc) * k2;
+  const double g2min = std::max(0.5 * (a + c - disc), 0.0) * k2;
+  const double big = std::sqrt(g2max);
+  const double shrink = g2min > 0 ? 1.0 / std::sqrt(g2min) : kInf;
+  return std::max(big, shrink);
+}
+
+class Optimizer {
+ public:
+  Optimizer(const std::vector<Vec3d>& positions, const std::vector<Face>& faces, std::vector<Vec2d>& uv,
+            const OptimizeOptions& o)
+      : faces_(faces), uv_(uv), o_(o), rng_(o.seed) {
+    const int nf = static_cast<int>(faces.size());
+    flat_.resize(nf);
+    for (int f = 0; f < nf; ++f)
+      flat_[f] = flatten(positions[faces[f][0]], positions[faces[f][1]], positions[faces[f][2]]);
+    topo_ = Topology(faces, static_cast<int>(uv.size()));
+    area3_ = 0;
+    for (const auto& t : flat_) area3_ += t.area;
+    tau_ = o.linf_margin * o.max_linf;
+    init_boundary();
+    recompute_sums();
+  }
+
+  bool valid() const { return valid_; }
+
+  double current_l2() const { return area3_ > 0 ? std::sqrt(s1_ * s2_) / area3_ : 0.0; }
+
+  OptimizeResult run() {
+    OptimizeResult r;
+    double last_l2 = current_l2();
+    for (int pass = 0; pass < o_.passes && valid_; ++pass) {
+      // Worst vertices first (§6).
+      std::vector<std::pair<double, int>> order;
+      for (int v = 0; v < static_cast<int>(uv_.size()); ++v) {
+        if (!topo_.is_referenced(v)) continue;
+        double l2, linf;
+        ring_stretch(v, l2, linf);
+        if (o_.vertex_l2_threshold > 0 && l2 <= o_.vertex_l2_threshold && linf <= tau_) continue;
+        order.emplace_back(-(l2 + (linf > tau_ ? linf : 0.0)), v);
+      }
+      if (order.empty()) break;
+      std::sort(order.begin(), order.end());
+      long long moved = 0;
+      for (const auto& [score, v] : order) moved += optimize_vertex(v) ? 1 : 0;
+      r.moves += moved;
+      ++r.sweeps;
+      recompute_sums();  // keep the running sums free of drift
+      if (moved == 0) break;
+      // Gains shrink from sweep to sweep: a chart that would still miss the bound with the
+      // last gain repeated every remaining sweep is rejected whatever happens next.
+      const double l2 = current_l2();
+      const int remaining = o_.passes - pass - 1;
+      if (o_.give_up_l2 > 0 && remaining > 0 && l2 - remaining * std::max(last_l2 - l2, 0.0) > o_.give_up_l2) {
+        r.gave_up = true;
+        break;
+      }
+      last_l2 = l2;
+    }
+    return r;
+  }
+
+ private:
+  void recompute_sums() {
+    s1_ = s2_ = pen_ = 0;
+    valid_ = true;
+    const int nf = static_cast<int>(faces_.size());
+    for (int f = 0; f < nf; ++f) {
+      double a, b, c, ar;
+      const Face& F = faces_[f];
+      if (!metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar)) {
+        valid_ = false;
+        continue;
+      }
+      s2_ += ar;
+      if (flat_[f].area > 0) s1_ += flat_[f].area * 0.5 * (a + c);
+    }
+    k2_ = area3_ > 0 ? s2_ / area3_ : 1.0;
+    // The penalty depends on the chart-wide normalization, so it needs k2 first.
+    for (int f = 0; f < nf; ++f) {
+      double a, b, c, ar;
+      const Face& F = faces_[f];
+      if (flat_[f].area <= 0 || !metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar)) continue;
+      const double li = linf_of(a, b, c, k2_);
+      if (li > tau_) pen_ += flat_[f].area * (li - tau_) * (li - tau_);
+    }
+  }
+
+  // Normalized L2 and max Linf over the faces around v.
+  void ring_stretch(int v, double& l2, double& linf) const {
+    double num = 0, den = 0;
+    linf = 0;
+    for (int f : topo_.vertex_faces(v)) {
+      const Face& F = faces_[f];
+      double a, b, c, ar;
+      if (flat_[f].area <= 0) continue;
+      if (!metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar)) {
+        linf = kInf;
+        continue;
+      }
+      num += flat_[f].area * 0.5 * (a + c) * k2_;
+      den += flat_[f].area;
+      linf = std::max(linf, linf_of(a, b, c, k2_));
+    }
+    l2 = den > 0 ? std::sqrt(num / den) : 0;
+  }
+
+  // Objective change terms for vertex v at position x: returns ring sums of the L2 numerator, the
+  // UV area and the Linf penalty; false when a ring triangle would flip.
+  bool ring_terms(int v, const Vec2d& x, double& s1, double& s2, double& pen) const {
+    s1 = s2 = pen = 0;
+    for (int f : topo_.vertex_faces(v)) {
+      const Face& F = faces_[f];
+      const Vec2d p0 = F[0] == v ? x : uv_[F[0]];
+      const Vec2d p1 = F[1] == v ? x : uv_[F[1]];
+      const Vec2d p2 = F[2] == v ? x : uv_[F[2]];
+      double a, b, c, ar;
+      if (flat_[f].area <= 0) {
+        if (signed_area(p0, p1, p2) <= 0) return false;
+        s2 += signed_area(p0, p1, p2);
+        continue;
+      }
+      if (!metric(flat_[f], p0, p1, p2, a, b, c, ar)) return false;
+      s1 += flat_[f].area * 0.5 * (a + c);
+      s2 += ar;
+      const double li = linf_of(a, b, c, k2_);
+      if (li > tau_) pen += flat_[f].area * (li - tau_) * (li - tau_);
+    }
+    return true;
+  }
+
+  // Global objective if the ring sums (s1, s2, pen) replaced the current ones (r1, r2, rpen).
+  double objective(double s1, double s2, double pen, double r1, double r2, double rpen) const {
+    const double S1 = s1_ - r1 + s1, S2 = s2_ - r2 + s2;
+    return S1 * S2 / (area3_ * area3_) + o_.linf_weight * (pen_ - rpen + pen) / area3_;
+  }
+
+  // Extent [lo, hi] of the line x0 + t d keeping every ring triangle counter-clockwise.
+  void kernel_segment(int v, const Vec2d& x0, const Vec2d& d, double& lo, double& hi) const {
+    lo = -kInf;
+    hi = kInf;
+    double reach = 0;
+    for (int f : topo_.vertex_faces(v)) {
+      const Face& F = faces_[f];
+      int k = F[0] == v ? 0 : (F[1] == v ? 1 : 2);
+      const Vec2d& a = uv_[F[(k + 1) % 3]];
+      const Vec2d& b = uv_[F[(k + 2) % 3]];
+      reach = std::max({reach, norm(a - x0), norm(b - x0)});
+      // v must stay left of a→b.
+      const double c0 = cross(b - a, x0 - a);
+      const double c1 = cross(b - a, d);
+      if (c1 < 0)
+        hi = std::min(hi, c0 / -c1);
+      else if (c1 > 0)
+        lo = std::max(lo, -c0 / c1);
+    }
+    // Boundary vertices can be unbounded in some directions: stay within the ring's reach.
+    hi = std::min(hi, reach);
+    lo = std::max(lo, -reach);
+    lo *= o_.conservative;
+    hi *= o_.conservative;
+  }
+
+  bool optimize_vertex(int v) {
+    double r1, r2, rpen;
+    const Vec2d x0 = uv_[v];
+    if (!ring_terms(v, x0, r1, r2, rpen)) return false;
+    const double f0 = objective(r1, r2, rpen, r1, r2, rpen);
+    double best = f0;
+    Vec2d best_x = x0;
+    double bs1 = r1, bs2 = r2, bpen = rpen;
+    double first_gain = 0;
+    for (int attempt = 0; attempt < o_.tries; ++attempt) {
+      const double theta = rng_.uniform() * 2 * M_PI;
+      const Vec2d d{std::cos(theta), std::sin(theta)};
+      double lo, hi;
+      kernel_segment(v, best_x, d, lo, hi);
+      if (!(hi > lo) || hi - lo < 1e-300) continue;
+      auto eval = [&](double t, double& s1, double& s2, double& pen) {
+        if (!ring_terms(v, best_x + d * t, s1, s2, pen)) return kInf;
+        if (!boundary_ok(v, best_x + d * t)) return kInf;
+        return objective(s1, s2, pen, r1, r2, rpen);
+      };
+      // Coarse samples, then golden-section refinement around the best one.
+      constexpr int kSamples = 5;
+      double ts[kSamples + 1], fs[kSamples + 1];
+      int bi = -1;
+      double s1, s2, pen;
+      for (int i = 0; i <= kSamples; ++i) {
+        ts[i] = lo + (hi - lo) * i / kSamples;
+        fs[i] = eval(ts[i], s1, s2, pen);
+        if (bi < 0 || fs[i] < fs[bi]) bi = i;
+      }
+      double a = ts[std::max(bi - 1, 0)], b = ts[std::min(bi + 1, kSamples)];
+      constexpr double g = 0.6180339887498949;
+      double c = b - g * (b - a), e = a + g * (b - a);
+      double fc = eval(c, s1, s2, pen), fe = eval(e, s1, s2, pen);
+      for (int it = 0; it < 8; ++it) {
+        if (fc < fe) {
+          b = e;
+          e = c;
+          fe = fc;
+          c = b - g * (b - a);
+          fc = eval(c, s1, s2, pen);
+        } else {
+          a = c;
+          c = e;
+          fc = fe;
+          e = a + g * (b - a);
+          fe = eval(e, s1, s2, pen);
+        }
+      }
+      double t = fc < fe ? c : e;
+      double ft = eval(t, s1, s2, pen);
+      if (fs[bi] < ft) {
+        t = ts[bi];
+        ft = eval(t, s1, s2, pen);
+      }
+      const double prev = best;
+      if (ft < best) {
+        best = ft;
+        best_x = best_x + d * t;
+        bs1 = s1;
+        bs2 = s2;
+        bpen = pen;
+      }
+      // §6: stop once a direction no longer improves the vertex enough; the first useful
+      // direction sets the scale of what "enough" means for this vertex.
+      const double gain = prev - best;
+      if (first_gain == 0) first_gain = gain;
+      if (first_gain > 0 && gain < o_.min_improvement * first_gain) break;
+    }
+    if (best_x == x0 || !(best < f0)) return false;
+    move_vertex(v, best_x);
+    s1_ += bs1 - r1;
+    s2_ += bs2 - r2;
+    pen_ += bpen - rpen;
+    return true;
+  }
+
+  // --- Boundary simplicity. With every triangle counter-clockwise, a simple boundary polygon
+  // makes the map injective, so moves of boundary vertices must keep the boundary simple.
+
+  void init_boundary() {
+    const int nv = static_cast<int>(uv_.size());
+    bprev_.assign(nv, -1);
+    bnext_.assign(nv, -1);
+    double len = 0;
+    int count = 0;
+    Vec2d lo = uv_.empty() ? Vec2d{} : uv_[0], hi = lo;
+    for (const auto& loop : topo_.boundary_loops())
+      for (size_t i = 0; i < loop.size(); ++i) {
+        const int a = loop[i], b = loop[(i + 1) % loop.size()];
+        bnext_[a] = b;
+        bprev_[b] = a;
+        len += norm(uv_[a] - uv_[b]);
+        ++count;
+      }
+    for (const auto& p : uv_) {
+      lo = {std::min(lo.x, p.x), std::min(lo.y, p.y)};
+      hi = {std::max(hi.x, p.x), std::max(hi.y, p.y)};
+    }
+    if (count == 0) return;
+    cell_ = std::max(2 * len / count, 1e-300);
+    const Vec2d pad = (hi - lo) * 0.5;
+    grid_lo_ = lo - pad;
+    grid_n_ = std::clamp(static_cast<int>((hi.x - lo.x + 2 * pad.x) / cell_) + 1, 1, 2048);
+    grid_m_ = std::clamp(static_cast<int>((hi.y - lo.y + 2 * pad.y) / cell_) + 1, 1, 2048);
+    grid_.assign(static_cast<size_t>(grid_n_) * grid_m_, {});
+    for (int v = 0; v < nv; ++v)
+      if (bnext_[v] >= 0) grid_edit(v, uv_[v], uv_[bnext_[v]], true);
+    stamp_.assign(nv, 0);
+  }
+
+  int cell_x(double x) const { return std::clamp(static_cast<int>((x - grid_lo_.x) / cell_), 0, grid_n_ - 1); }
+  int cell_y(double y) const { return std::clamp(static_cast<int>((y - grid_lo_.y) / cell_), 0, grid_m_ - 1); }
+
+  // Adds or removes boundary edge (v → bnext_[v]) with endpoints a, b in every cell its box covers.
+  void grid_edit(int v, const Vec2d& a, const Vec2d& b, bool add) {
+    for (int i = cell_x(std::min(a.x, b.x)); i <= cell_x(std::max(a.x, b.x)); ++i)
+      for (int j = cell_y(std::min(a.y, b.y)); j <= cell_y(std::max(a.y, b.y)); ++j) {
+        auto& c = grid_[static_cast<size_t>(j) * grid_n_ + i];
+        if (add)
+          c.push_back(v);
+        else
+          c.erase(std::find(c.begin(), c.end(), v));
+      }
+  }
+
+  static bool segments_touch(const Vec2d& a, const Vec2d& b, const Vec2d& c, const Vec2d& d) {
+    const double d1 = cross(b - a, c - a), d2 = cross(b - a, d - a);
+    const double d3 = cross(d - c, a - c), d4 = cross(d - c, b - c);
+    if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) return true;
+    // Collinear or endpoint contacts count as touching: conservative, only refuses a move.
+    auto on = [](const Vec2d& p, const Vec2d& q, const Vec2d& r, double o) {
+      return o == 0 && std::min(p.x, q.x) <= r.x && r.x <= std::max(p.x, q.x) && std::min(p.y, q.y) <= r.y &&
+             r.y <= std::max(p.y, q.y);
+    };
+    return on(a, b, c, d1) || on(a, b, d, d2) || on(c, d, a, d3) || on(c, d, b, d4);
+  }
+
+  // Does segment (p → q) from boundary vertex `from` to `to` touch a boundary edge not incident
+  // to either?
+  bool crosses_boundary(int from, int to, const Vec2d& p, const Vec2d& q) {
+    ++stamp_id_;
+    for (int i = cell_x(std::min(p.x, q.x)); i <= cell_x(std::max(p.x, q.x)); ++i)
+      for (int j = cell_y(std::min(p.y, q.y)); j <= cell_y(std::max(p.y, q.y)); ++j)
+        for (int e : grid_[static_cast<size_t>(j) * grid_n_ + i]) {
+          if (stamp_[e] == stamp_id_) continue;
+          stamp_[e] = stamp_id_;
+          const int a = e, b = bnext_[e];
+          if (a == from || a == to || b == from || b == to) continue;
+          if (segments_touch(p, q, uv_[a], uv_[b])) return true;
+        }
+    return false;
+  }
+
+  // Sum of the triangle angles at vertex w, with vertex v placed at x.
+  double angle_sum(int w, int v, const Vec2d& x) const {
+    double sum = 0;
+    for (int f : topo_.vertex_faces(w)) {
+      const Face& F = faces_[f];
+      const int k = F[0] == w ? 0 : (F[1] == w ? 1 : 2);
+      auto at = [&](int u) { return u == v ? x : uv_[u]; };
+      const Vec2d c = at(F[k]), a = at(F[(k + 1) % 3]) - c, b = at(F[(k + 2) % 3]) - c;
+      sum += std::atan2(cross(a, b), dot(a, b));
+    }
+    return sum;
+  }
+
+  // Keeps the boundary simple when boundary vertex v moves to x (interior vertices always pass).
+  bool boundary_ok(int v, const Vec2d& x) {
+    if (bnext_[v] < 0) return true;
+    const int p = bprev_[v], n = bnext_[v];
+    constexpr double kMaxAngle = 2 * M_PI * (1 - 1e-9);
+    if (angle_sum(v, v, x) >= kMaxAngle || angle_sum(p, v, x) >= kMaxAngle || angle_sum(n, v, x) >= kMaxAngle)
+      return false;
+    return !crosses_boundary(p, v, uv_[p], x) && !crosses_boundary(v, n, x, uv_[n]);
+  }
+
+  void move_vertex(int v, const Vec2d& x) {
+    if (bnext_[v] >= 0 && !grid_.empty()) {
+      grid_edit(v, uv_[v], uv_[bnext_[v]], false);
+      grid_edit(bprev_[v], uv_[bprev_[v]], uv_[v], false);
+      uv_[v] = x;
+      grid_edit(v, uv_[v], uv_[bnext_[v]], true);
+      grid_edit(bprev_[v], uv_[bprev_[v]], uv_[v], true);
+    } else {
+      uv_[v] = x;
+    }
+  }
+
+  const std::vector<Face>& faces_;
+  std::vector<Vec2d>& uv_;
+  OptimizeOptions o_;
+  Rng rng_;
+  std::vector<FlatTriangle> flat_;
+  Topology topo_;
+  double area3_ = 0, s1_ = 0, s2_ = 0, pen_ = 0, k2_ = 1, tau_ = 0;
+  bool valid_ = true;
+  std::vector<int> bprev_, bnext_;
+  std::vector<std::vector<int>> grid_;
+  std::vector<unsigned> stamp_;
+  unsigned stamp_id_ = 0;
+  Vec2d grid_lo_;
+  double cell_ = 1;
+  int grid_n_ = 0, grid_m_ = 0;
+};
+
+// Sutherland–Hodgman clip of a convex polygon by the half-plane left of a→b.
+std::vector<Vec2d> clip_left(const std::vector<Vec2d>& poly, const Vec2d& a, const Vec2d& b) {
+  std::vector<Vec2d> out;
+  const size_t n = poly.size();
+  for (size_t i = 0; i < n; ++i) {
+    const Vec2d& p = poly[i];
+    const Vec2d& q = poly[(i + 1) % n];
+    const double sp = cross(b - a, p - a), sq = cross(b - a, q - a);
+    if (sp >= 0) out.push_back(p);
+    if ((sp >= 0) != (sq >= 0)) out.push_back(p + (q - p) * (sp / (sp - sq)));
+  }
+  return out;
+}
+
+}  // namespace
+
+int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, int max_passes) {
+  const Topology topo(faces, static_cast<int>(uv.size()));
+  auto flipped = [&](int f) {
+    const Face& t = faces[f];
+    return !(signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) > 0);
+  };
+  int remaining = 0;
+  for (int pass = 0; pass < max_passes; ++pass) {
+    std::vector<int> verts;
+    for (int f = 0; f < static_cast<int>(faces.size()); ++f)
+      if (flipped(f))
+        for (int k = 0; k < 3; ++k) verts.push_back(faces[f][k]);
+    std::sort(verts.begin(), verts.end());
+    verts.erase(std::unique(verts.begin(), verts.end()), verts.end());
+    remaining = 0;
+    for (int f = 0; f < static_cast<int>(faces.size()); ++f) remaining += flipped(f) ? 1 : 0;
+    if (remaining == 0) return 0;
+    for (int v : verts) {
+      // Kernel: the points left of the far edge of every triangle around v.
+      double lo_x = kInf, lo_y = kInf, hi_x = -kInf, hi_y = -kInf;
+      Vec2d mean;
+      int count = 0;
+      for (int w : topo.vertex_neighbors(v)) {
+        lo_x = std::min(lo_x, uv[w].x);
+        hi_x = std::max(hi_x, uv[w].x);
+        lo_y = std::min(lo_y, uv[w].y);
+        hi_y = std::max(hi_y, uv[w].y);
+        mean += uv[w];
+        ++count;
+      }
+      if (count == 0) continue;
+      mean /= count;
+      const double pad = std::max(hi_x - lo_x, hi_y - lo_y);
+      std::vector<Vec2d> poly = {{lo_x - pad, lo_y - pad}, {hi_x + pad, lo_y - pad}, {hi_x + pad, hi_y + pad},
+                                 {lo_x - pad, hi_y + pad}};
+      for (int f : topo.vertex_faces(v)) {
+        const Face& t = faces[f];
+        const int k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+        poly = clip_left(poly, uv[t[(k + 1) % 3]], uv[t[(k + 2) % 3]]);
+        if (poly.size() < 3) break;
+      }
+      double area2 = 0;
+      Vec2d c;
+      for (size_t i = 0; poly.size() >= 3 && i < poly.size(); ++i) {
+        const Vec2d& p = poly[i];
+        const Vec2d& q = poly[(i + 1) % poly.size()];
+        const double w = cross(p, q);
+        area2 += w;
+        c += (p + q) * w;
+      }
+      if (area2 > 1e-12 * pad * pad)
+        uv[v] = c / (3 * area2);
+      else if (!topo.is_boundary_vertex(v))
+        uv[v] = mean;  // no kernel yet: smoothing lets the neighbours unfold first
+    }
+  }
+  remaining = 0;
+  for (int f = 0; f < static_cast<int>(faces.size()); ++f) remaining += flipped(f) ? 1 : 0;
+  return remaining;
+}
+
+OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
+                                std::vector<Vec2d>& uv, const OptimizeOptions& options) {
+  OptimizeResult r;
+  r.before = measure_stretch(positions, faces, uv);
+  Optimizer opt(positions, faces, uv, options);
+  if (opt.valid()) {
+    const OptimizeResult run = opt.run();
+    r.moves = run.moves;
+    r.sweeps = run.sweeps;
+    r.gave_up = run.gave_up;
+  }
+  r.after = measure_stretch(positions, faces, uv);
+  return r;
+}
+
+}  // namespace isochart

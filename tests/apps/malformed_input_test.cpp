@@ -1,0 +1,251 @@
+// The CLI on a corpus of malformed and repairable inputs: every bad file is exit code 2 and
+// exactly one clear line on stderr, naming the file and the problem, with no output left.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "isochart/io_test_util.h"
+
+using namespace io_test;
+
+namespace {
+
+// Runs the CLI with stdout discarded and stderr saved; returns the exit code.
+int run_cli(const std::string& args, const fs::path& err) {
+  const std::string cmd =
+      std::string("'") + ISOCHARTS_CLI + "' " + args + " > /dev/null 2> '" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// Deterministic pseudo-random bytes (no global rand()).
+std::string noise(std::size_t n, std::uint32_t seed) {
+  std::string s(n, '\0');
+  for (auto& c : s) {
+    seed = seed * 1664525u + 1013904223u;
+    c = static_cast<char>(seed >> 24);
+  }
+  return s;
+}
+
+template <typename T>
+std::string le(T v) {
+  return Bytes().put(v).data;
+}
+
+const std::string kTriangleObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+const std::string kTetraObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+std::string binary_ply_header(int vertices, int faces) {
+  return "ply\nformat binary_little_endian 1.0\nelement vertex " + std::to_string(vertices) +
+         "\nproperty float x\nproperty float y\nproperty float z\nelement face " + std::to_string(faces) +
+         "\nproperty list uchar int vertex_indices\nend_header\n";
+}
+
+std::string binary_ply_triangle(float bad) {
+  std::string s = binary_ply_header(3, 1);
+  for (float x : {0.0f, 0.0f, 0.0f, 1.0f, bad, 0.0f, 0.0f, 1.0f, 0.0f}) s += le(x);
+  s += le<std::uint8_t>(3) + le<std::int32_t>(0) + le<std::int32_t>(1) + le<std::int32_t>(2);
+  return s;
+}
+
+std::string gltf_with_count(int count) {
+  std::string bin;
+  for (float x : {0.0f, 0.0f, 0.0f, 1.0f, 0.0f, 0.0f, 0.0f, 1.0f, 0.0f}) bin += le(x);
+  const nlohmann::json doc = {
+      {"asset", {{"version", "2.0"}}},
+      {"scenes", {{{"nodes", {0}}}}},
+      {"nodes", {{{"mesh", 0}}}},
+      {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}}}}}}},
+      {"buffers", {{{"byteLength", 36}, {"uri", "data:application/octet-stream;base64," + base64(bin)}}}},
+      {"bufferViews", {{{"buffer", 0}, {"byteLength", 36}}}},
+      {"accessors", {{{"bufferView", 0}, {"componentType", 5126}, {"count", count}, {"type", "VEC3"}}}}};
+  return doc.dump();
+}
+
+struct Case {
+  std::string file;     // input name inside its own directory
+  std::string content;  // written as is
+  std::string word;     // the problem, as stderr must name it
+  enum Kind { File, Missing, Directory } kind = File;
+};
+
+std::vector<Case> malformed_corpus() {
+  std::vector<Case> c;
+  c.push_back({"missing.obj", "", "cannot open file", Case::Missing});
+  c.push_back({"folder.obj", "", "is a directory", Case::Directory});
+  c.push_back({"mesh.stl", "solid x\nendsolid x\n", "unknown mesh format"});
+  c.push_back({"no_extension", kTetraObj, "no file extension"});
+  c.push_back({"empty.obj", "", "file is empty"});
+  c.push_back({"garbage.obj", "\x89PNG\r\n" + noise(4000, 1), "is not an OBJ statement"});
+  c.push_back({"garbage_nul.obj", std::string("v 1 2 3\n\0\0\x01garbage", 19), "unexpected binary data"});
+  c.push_back({"garbage.ply", noise(4000, 2), "not a PLY file"});
+  c.push_back({"garbage.off", "OFX 12 garbage\n" + noise(100, 3), "expected an OFF header"});
+  c.push_back({"truncated.obj", kTriangleObj + "v 0 0", "expected 3 coordinates after 'v'"});
+  c.push_back({"truncated.off",
+               "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 # a comment long enough to pass the size check\n",
+               "(truncated)"});
+  c.push_back(
+      {"truncated_ascii.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n\n\n\n\n\n\n\n\n",
+       "vertex 2: unexpected end of file (truncated)"});
+  c.push_back({"truncated_binary.ply",
+               binary_ply_triangle(0).substr(0, binary_ply_header(3, 1).size() + 36 + 5),
+               "face 0: list of 3 values runs past the end of the file (truncated)"});
+  c.push_back({"nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "coordinate 'nan' is not finite"});
+  c.push_back({"inf.off", "OFF\n3 1 0\n0 0 0\n1 inf 0\n0 1 0\n3 0 1 2\n", "value 'inf' is not finite"});
+  c.push_back({"nan_binary.ply", binary_ply_triangle(std::nanf("")), "vertex 1 has a non-finite coordinate"});
+  c.push_back({"inf_binary.ply", binary_ply_triangle(-INFINITY),
+               "vertex 1 has a non-finite coordinate (1, -inf, 0)"});
+  c.push_back({"index_range.obj", kTriangleObj + "f 1 2 9\n", "vertex index 9 is out of range"});
+  c.push_back({"index_zero.obj", kTriangleObj + "f 0 1 2\n", "vertex index 0 is invalid"});
+  c.push_back(
+      {"negative_index.obj", kTriangleObj + "f -1 -2 -9\n", "relative vertex index -9 reaches before"});
+  c.push_back(
+      {"index_range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "vertex index 3 is out of range"});
+  c.push_back(
+      {"index_range.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
+       "face 0 refers to vertex 7"});
+  c.push_back({"two_corners.obj", kTriangleObj + "f 1 2\n", "face has 2 corners"});
+  c.push_back({"two_corners.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "face has 2 corners"});
+  c.push_back(
+      {"huge_counts.off", "OFF\n2000000000 2000000000 0\n0 0 0\n", "header declares 2000000000 vertices"});
+  c.push_back(
+      {"huge_counts.ply", binary_ply_header(2000000000, 5), "header declares 2000000000 vertex elements"});
+  c.push_back(
+      {"huge_list.ply",
+       binary_ply_header(3, 1) + std::string(36, '\0') + le<std::uint8_t>(255) + std::string(12, '\0'),
+       "list of 255 values runs past"});
+  c.push_back({"bad_format.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n", "unknown PLY format"});
+  c.push_back({"no_end_header.ply", "ply\nformat ascii 1.0\nelement vertex 3\n", "no end_header line"});
+  c.push_back({"bad_counts.off", "OFF\nthree 1 0\n", "expected the vertex, face and edge counts"});
+  c.push_back({"truncated.glb", "glTF" + le<std::uint32_t>(2) + le<std::uint32_t>(4000) + noise(40, 4),
+               "invalid glTF"});
+  c.push_back({"bad_json.gltf", "{ \"asset\": { \"version\": \"2.0\" ", "invalid glTF"});
+  c.push_back({"non_utf8.gltf", "{ \"asset\xff\xfe\": 1 }", "invalid glTF"});
+  c.push_back({"accessor.gltf", gltf_with_count(30), "runs past the end of its bufferView"});
+  c.push_back({"all_degenerate.obj", "v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\nf 1 1 2\n", "no faces left"});
+  c.push_back({"no_faces.off", "OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n", "mesh has no faces"});
+  c.push_back({"points_only.obj", kTriangleObj, "mesh has no faces"});
+  c.push_back({"non_utf8.obj", kTriangleObj + "\xc3\x28\xff 1 2\nf 1 2 3\n",
+               "'\\xc3(\\xff' is not an OBJ statement"});
+  c.push_back({"long_line.obj", kTriangleObj + std::string(3'000'000, 'x') + "\nf 1 2 3\n",
+               "is not an OBJ statement"});
+  std::string many = "v";
+  for (int i = 0; i < 500'000; ++i) many += " 1";
+  c.push_back({"long_vertex.obj", many + "\n", "too many numbers after 'v'"});
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("malformed inputs: exit 2, one clear line, nothing left behind", "[cli]") {
+  TempDir tmp("malformed");
+  const std::vector<Case> corpus = malformed_corpus();
+  REQUIRE(corpus.size() >= 25);
+  int index = 0;
+  for (const Case& c : corpus) {
+    INFO(c.file);
+    const fs::path dir = tmp.path / ("case" + std::to_string(index++));
+    fs::create_directories(dir);
+    const fs::path input = dir / c.file;
+    if (c.kind == Case::File) write_bytes(input, c.content);
+    if (c.kind == Case::Directory) fs::create_directory(input);
+    const std::vector<std::string> before = entries(dir);
+    const fs::path err = tmp.path / ("stderr" + std::to_string(index) + ".txt");
+    const int code =
+        run_cli("info '" + input.string() + "' --report '" + (dir / "OUT.json").string() + "'", err);
+    const std::string text = read_bytes(err);
+    CHECK(code == 2);
+    CHECK(std::count(text.begin(), text.end(), '\n') == 1);
+    CHECK(text.back() == '\n');
+    CHECK_THAT(text, Catch::StartsWith("isocharts: error: "));
+    CHECK_THAT(text, Catch::Contains(c.file));
+    CHECK_THAT(text, Catch::Contains(c.word));
+    CHECK(text.size() < 400);       // a message, not a dump of the input
+    CHECK(entries(dir) == before);  // no OUT.json, no temporary file
+  }
+}
+
+TEST_CASE("repairable inputs: warnings and exit 0, or exit 2 with --no-repair", "[cli]") {
+  TempDir tmp("repairable");
+  struct Repairable {
+    std::string file, content;
+    std::vector<std::string> warnings;
+  };
+  const std::vector<Repairable> cases = {
+      {"quad.obj",
+       "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
+       {"triangulated 1 polygon into 2 triangles"}},
+      {"degenerate.obj", kTetraObj + "f 1 1 2\n", {"removed 1 degenerate face"}},
+      {"duplicate.off",
+       "OFF\n4 5 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n3 3 2 1\n",
+       {"removed 1 duplicate face"}},
+      {"unreferenced.obj", kTetraObj + "v 5 5 5\n", {"dropped 1 unreferenced vertex"}},
+      {"flipped.obj",
+       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 4 3\nf 2 3 4\n",
+       {"reoriented 1 face"}},
+      {"touching.obj",
+       kTetraObj + "v 0 -1 0\nv 0 0 -1\nf 1 5 2\nf 1 2 6\nf 1 6 5\nf 2 5 6\n",
+       {"split 1 non-manifold edge"}},
+      {"several.obj",
+       "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 9 9 9\nf 1 2 3 4\nf 1 2 2\n",
+       {"triangulated 1 polygon", "removed 1 degenerate face", "dropped 1 unreferenced vertex"}},
+  };
+  int index = 0;
+  for (const auto& c : cases) {
+    INFO(c.file);
+    const fs::path dir = tmp.path / ("case" + std::to_string(index++));
+    fs::create_directories(dir);
+    const fs::path input = dir / c.file, out = dir / "OUT.json", err = dir / "stderr.txt";
+    write_bytes(input, c.content);
+
+    CHECK(run_cli("info '" + input.string() + "' --report '" + out.string() + "'", err) == 0);
+    std::istringstream lines(read_bytes(err));
+    std::vector<std::string> got;
+    for (std::string line; std::getline(lines, line);) got.push_back(line);
+    REQUIRE(got.size() == c.warnings.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      CHECK_THAT(got[i], Catch::StartsWith("isocharts: warning: " + input.string() + ": "));
+      CHECK_THAT(got[i], Catch::Contains(c.warnings[i]));
+    }
+    REQUIRE(fs::exists(out));
+    const nlohmann::json report = nlohmann::json::parse(read_bytes(out));
+    CHECK(report["warnings"].size() == c.warnings.size());
+    fs::remove(out);
+
+    CHECK(run_cli("info --no-repair '" + input.string() + "' --report '" + out.string() + "'", err) == 2);
+    const std::string text = read_bytes(err);
+    CHECK(std::count(text.begin(), text.end(), '\n') == 1);
+    CHECK_THAT(text, Catch::StartsWith("isocharts: error: " + input.string() + ": "));
+    CHECK_THAT(text, Catch::Contains("use repair"));
+    CHECK_FALSE(fs::exists(out));
+  }
+}
+
+TEST_CASE("the report is written atomically next to a good input", "[cli]") {
+  TempDir tmp("report");
+  const fs::path input = tmp.path / "tetra.obj", out = tmp.path / "report.json", err = tmp.path / "err.txt";
+  write_bytes(input, kTetraObj);
+  REQUIRE(run_cli("info '" + input.string() + "' --json --report '" + out.string() + "'", err) == 0);
+  CHECK(read_bytes(err).empty());
+  const nlohmann::json j = nlohmann::json::parse(read_bytes(out));
+  CHECK(j["faces"] == 4);
+  CHECK(j["closed"] == true);
+  CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt", "report.json", "tetra.obj"});
+  // An unwritable report path is a clear error too.
+  CHECK(run_cli("info '" + input.string() + "' --report '" + (tmp.path / "no/dir/r.json").string() + "'",
+                err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::StartsWith("isocharts: error: ") && Catch::Contains("cannot write"));
+}

@@ -1,0 +1,180 @@
+#include "isochart/atlas.h"
+
+#include <tbb/global_control.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "isochart/builtin.h"
+#include "isochart/error.h"
+#include "isochart/stretch.h"
+
+using namespace isochart;
+
+namespace {
+
+// Everything an accepted atlas must satisfy, measured on the mesh with its final UVs.
+void check_atlas(const Mesh& mesh, const Atlas& atlas, const AtlasOptions& o) {
+  const Mesh m = atlas.apply_to(mesh);
+  REQUIRE(m.face_uvs.size() == mesh.faces.size());
+  const StretchStats st = measure_stretch(m);
+  CHECK(st.flipped == 0);
+  CHECK(overlapping_uv_pairs(m).empty());
+  CHECK(st.l2 <= o.max_l2 + 1e-9);
+  CHECK(st.linf <= o.max_linf + 1e-9);
+  for (const auto& uv : m.uvs) {
+    CHECK(uv.x >= 0);
+    CHECK(uv.x <= 1);
+    CHECK(uv.y >= 0);
+    CHECK(uv.y <= 1);
+  }
+  // Every chart is one disk-topology piece meeting both bounds on its own.
+  for (int c = 0; c < atlas.num_charts(); ++c) {
+    std::vector<int> faces;
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      if (atlas.face_chart[f] == c) faces.push_back(f);
+    REQUIRE(!faces.empty());
+    const StretchStats cs = measure_stretch(m, faces);
+    CHECK(cs.l2 <= o.max_l2 + 1e-9);
+    CHECK(cs.linf <= o.max_linf + 1e-9);
+  }
+  int uv_charts_found = 0;
+  uv_charts(m, uv_charts_found);
+  CHECK(uv_charts_found == atlas.num_charts());
+  CHECK(atlas.stats.flipped == 0);
+  CHECK(atlas.stats.overlapping_pairs == 0);
+  CHECK(atlas.stats.packing_ratio > 0.3);
+}
+
+}  // namespace
+
+TEST_CASE("atlas of a sphere meets the stretch bounds", "[atlas]") {
+  const Mesh sphere = make_builtin("sphere");
+  AtlasOptions o;
+  const Atlas a = build_atlas(sphere, o);
+  INFO("charts " << a.num_charts() << " L2 " << a.stats.l2 << " Linf " << a.stats.linf);
+  check_atlas(sphere, a, o);
+  // A closed surface needs at least two charts; a sphere should not need many.
+  CHECK(a.num_charts() >= 2);
+  CHECK(a.num_charts() <= 8);
+}
+
+TEST_CASE("atlas of an open disk patch is a single chart", "[atlas]") {
+  const Mesh face = make_builtin("face");
+  AtlasOptions o;
+  const Atlas a = build_atlas(face, o);
+  check_atlas(face, a, o);
+  CHECK(a.num_charts() == 1);
+}
+
+TEST_CASE("atlas of a torus cuts its handle", "[atlas]") {
+  const Mesh torus = make_builtin("torus");
+  AtlasOptions o;
+  const Atlas a = build_atlas(torus, o);
+  INFO("charts " << a.num_charts());
+  check_atlas(torus, a, o);
+}
+
+TEST_CASE("tighter bounds give more charts and lower stretch", "[atlas]") {
+  const Mesh sphere = make_builtin("sphere");
+  AtlasOptions loose, tight;
+  tight.max_l2 = 1.02;
+  tight.max_linf = 1.5;
+  const Atlas a = build_atlas(sphere, loose), b = build_atlas(sphere, tight);
+  check_atlas(sphere, b, tight);
+  CHECK(b.num_charts() > a.num_charts());
+  CHECK(b.stats.l2 <= 1.02 + 1e-9);
+}
+
+TEST_CASE("max_charts splits until the requested count", "[atlas]") {
+  const Mesh sphere = make_builtin("sphere");
+  AtlasOptions o;
+  o.max_charts = 12;
+  const Atlas a = build_atlas(sphere, o);
+  check_atlas(sphere, a, o);
+  CHECK(a.num_charts() == 12);
+}
+
+TEST_CASE("several components are charted separately", "[atlas]") {
+  Mesh a = make_builtin("sphere");
+  const Mesh b = make_builtin("torus");
+  const int offset = a.num_vertices();
+  for (const auto& p : b.positions) a.positions.push_back(p + Vec3d{5, 0, 0});
+  for (const auto& f : b.faces) a.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+  AtlasOptions o;
+  const Atlas atlas = build_atlas(a, o);
+  check_atlas(a, atlas, o);
+  // No chart spans both components.
+  const Topology topo(a);
+  std::vector<int> comp_of_chart(atlas.num_charts(), -1);
+  for (int f = 0; f < a.num_faces(); ++f) {
+    int& c = comp_of_chart[atlas.face_chart[f]];
+    if (c < 0) c = topo.face_components()[f];
+    CHECK(c == topo.face_components()[f]);
+  }
+}
+
+TEST_CASE("atlas is identical for one and two threads", "[atlas]") {
+  const Mesh torus = make_builtin("torus");
+  AtlasOptions o;
+  o.seed = 42;
+  Atlas one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = build_atlas(torus, o);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = build_atlas(torus, o);
+  }
+  CHECK(one.face_chart == two.face_chart);
+  CHECK(one.face_uvs == two.face_uvs);
+  CHECK(one.uvs == two.uvs);
+}
+
+TEST_CASE("bad atlas options are refused with a message naming the option", "[atlas]") {
+  const Mesh sphere = make_builtin("sphere");
+  auto fails_with = [&](AtlasOptions o, const std::string& word) {
+    try {
+      build_atlas(sphere, o);
+      FAIL("no error for " << word);
+    } catch (const InputError& e) {
+      CHECK(std::string(e.what()).find(word) != std::string::npos);
+    }
+  };
+  AtlasOptions o;
+  o.max_l2 = 0.5;
+  fails_with(o, "--max-l2");
+  o = {};
+  o.max_linf = std::nan("");
+  fails_with(o, "--max-linf");
+  o = {};
+  o.max_charts = -1;
+  fails_with(o, "--max-charts");
+  o = {};
+  o.alpha = 2;
+  fails_with(o, "--alpha");
+  o = {};
+  o.pack.width = 0;
+  fails_with(o, "--width");
+  o = {};
+  o.landmarks = 1;
+  fails_with(o, "--landmarks");
+}
+
+TEST_CASE("atlas of the creature, without graph cut and without merging", "[atlas][slow]") {
+  const Mesh creature = make_builtin("creature");
+  for (bool cut : {true, false}) {
+    AtlasOptions o;
+    o.graph_cut = cut;
+    const Atlas a = build_atlas(creature, o);
+    INFO("graph cut " << cut << ": charts " << a.num_charts());
+    check_atlas(creature, a, o);
+    CHECK(a.stats.charts_before_merge >= a.num_charts());
+  }
+  AtlasOptions no_merge;
+  no_merge.merge = false;
+  const Atlas b = build_atlas(creature, no_merge);
+  check_atlas(creature, b, no_merge);
+  CHECK(b.num_charts() == b.stats.charts_before_merge);
+}

@@ -1,0 +1,93 @@
+// Internal chart helpers: cutting charts into disks and the LSCM start.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "../../libisochart/src/chart.h"
+#include "isochart/stretch.h"
+
+using namespace isochart;
+using namespace isochart::detail;
+
+namespace {
+
+// An annulus in the plane, r in [1, 2], as a chart (two boundary loops).
+ChartGeometry annulus(int n = 32, int m = 4) {
+  ChartGeometry g;
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * M_PI * i / n, r = 1 + double(j) / m;
+      g.positions.push_back({r * std::cos(a), r * std::sin(a), 0});
+      g.vertex_parent.push_back(static_cast<int>(g.vertex_parent.size()));
+    }
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * n + i, b = j * n + (i + 1) % n, c = a + n, d = b + n;
+      g.tris.push_back({a, d, b});  // counter-clockwise: outward, then along the angle
+      g.tris.push_back({a, c, d});
+      g.faces.push_back(static_cast<int>(g.faces.size()));
+      g.faces.push_back(static_cast<int>(g.faces.size()));
+    }
+  return g;
+}
+
+}  // namespace
+
+TEST_CASE("cut_to_disk slits an annulus into one boundary loop", "[chart]") {
+  ChartGeometry g = annulus();
+  const int before = g.num_vertices();
+  std::vector<int> origin;
+  REQUIRE(cut_to_disk(g, &origin));
+  const Topology t(g.tris, g.num_vertices());
+  CHECK(t.boundary_loops().size() == 1);
+  CHECK(t.num_components() == 1);
+  CHECK(t.genus() == 0);
+  CHECK(g.num_vertices() > before);  // the slit duplicated its vertices
+  REQUIRE(origin.size() == static_cast<size_t>(g.num_vertices()));
+  for (int v = 0; v < g.num_vertices(); ++v) {
+    CHECK(g.positions[v] == g.positions[origin[v]]);
+    CHECK(g.vertex_parent[v] == g.vertex_parent[origin[v]]);
+  }
+}
+
+TEST_CASE("cut_to_disk refuses a closed surface", "[chart]") {
+  ChartGeometry g;
+  g.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  g.vertex_parent = {0, 1, 2, 3};
+  g.tris = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  g.faces = {0, 1, 2, 3};
+  CHECK_FALSE(cut_to_disk(g));
+}
+
+TEST_CASE("LSCM of a slit planar annulus is conformal and fold-free", "[chart]") {
+  ChartGeometry g = annulus();
+  REQUIRE(cut_to_disk(g));
+  std::vector<Vec2d> uv;
+  REQUIRE(lscm(g, uv));
+  int negative = 0;
+  for (const Face& t : g.tris) negative += signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) < 0 ? 1 : 0;
+  // Planar input: LSCM reproduces it up to a similarity (either orientation).
+  CHECK((negative == 0 || negative == g.num_faces()));
+  if (negative) for (auto& p : uv) p.y = -p.y;
+  const StretchStats st = measure_stretch(g.positions, g.tris, uv);
+  CHECK(st.l2 == Approx(1.0).margin(1e-6));
+  CHECK(st.linf == Approx(1.0).margin(1e-6));
+}
+
+TEST_CASE("open_slits separates slit copies without flipping", "[chart]") {
+  ChartGeometry g = annulus();
+  std::vector<int> origin;
+  REQUIRE(cut_to_disk(g, &origin));
+  std::vector<Vec2d> uv(g.num_vertices());
+  for (int v = 0; v < g.num_vertices(); ++v) uv[v] = {g.positions[v].x, g.positions[v].y};
+  open_slits(g, origin, uv);
+  std::vector<std::array<Vec2d, 3>> tris;
+  for (const Face& t : g.tris) {
+    CHECK(signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) > 0);
+    tris.push_back({uv[t[0]], uv[t[1]], uv[t[2]]});
+  }
+  CHECK(overlapping_uv_pairs(tris).empty());
+  bool moved = false;
+  for (int v = 0; v < g.num_vertices(); ++v)
+    if (origin[v] != v) moved = moved || uv[v] != uv[origin[v]];
+  CHECK(moved);
+}

@@ -1,0 +1,188 @@
+#include "isochart/image.h"
+
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "isochart/error.h"
+
+using namespace isochart;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A fresh, empty directory per test case, removed afterwards.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    static int counter = 0;
+    path = fs::temp_directory_path() /
+           ("isocharts_image_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+    fs::remove_all(path);
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  std::string file(const std::string& name) const { return (path / name).string(); }
+  int entries() const {
+    return static_cast<int>(std::distance(fs::directory_iterator(path), fs::directory_iterator()));
+  }
+};
+
+// Values on the 8-bit grid (k/255) so a PNG round trip is exact.
+Image gradient_image(int w, int h, int c) {
+  Image img(w, h, c);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int k = 0; k < c; ++k)
+        img.at(x, y, k) = static_cast<float>(((x * 37 + y * 11 + k * 85) % 256) / 255.0);
+  return img;
+}
+
+}  // namespace
+
+TEST_CASE("PNG round trip keeps size, channels and 8-bit values", "[image]") {
+  TempDir dir;
+  for (int channels : {1, 3, 4}) {
+    const Image a = gradient_image(7, 5, channels);
+    const std::string path = dir.file("rgb" + std::to_string(channels) + ".png");
+    write_image(path, a);
+    const Image b = read_image(path);
+    REQUIRE(b.width == 7);
+    REQUIRE(b.height == 5);
+    REQUIRE(b.channels == channels);
+    double worst = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i)
+      worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
+    CHECK(worst < 1e-6);
+    // Rows are stored top first: pixel (6, 0) keeps its value.
+    CHECK(b.at(6, 0, 0) == Approx(a.at(6, 0, 0)).margin(1e-6));
+  }
+}
+
+TEST_CASE("8-bit output clamps and rounds", "[image]") {
+  TempDir dir;
+  Image a(3, 1, 1);
+  a.pixels = {-0.5f, 0.5f, 2.0f};
+  write_image(dir.file("c.png"), a);
+  const Image b = read_image(dir.file("c.png"));
+  CHECK(b.pixels[0] == 0.0f);
+  CHECK(std::abs(b.pixels[1] - 128 / 255.0f) < 1.0f / 255);
+  CHECK(b.pixels[2] == 1.0f);
+}
+
+TEST_CASE("EXR round trip keeps float values exactly", "[image]") {
+  TempDir dir;
+  Image a(4, 3, 3);
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) a.pixels[i] = static_cast<float>(-2.5 + 0.3137 * i);
+  write_image(dir.file("geo.exr"), a);
+  const Image b = read_image(dir.file("geo.exr"));
+  REQUIRE(b.width == 4);
+  REQUIRE(b.height == 3);
+  REQUIRE(b.channels == 3);
+  CHECK(a.pixels == b.pixels);
+}
+
+TEST_CASE("JPEG output drops alpha", "[image]") {
+  TempDir dir;
+  Image a(8, 8, 4, 0.5f);
+  write_image(dir.file("a.jpg"), a);
+  const Image b = read_image(dir.file("a.jpg"));
+  CHECK(b.channels == 3);
+  CHECK(std::abs(b.at(3, 3, 0) - 0.5f) < 0.02f);
+}
+
+TEST_CASE("write_image is atomic and leaves no temporary files", "[image]") {
+  TempDir dir;
+  const std::string path = dir.file("out.png");
+  write_image(path, gradient_image(4, 4, 3));
+  CHECK(dir.entries() == 1);
+  // Overwriting replaces the file in one step.
+  write_image(path, gradient_image(9, 2, 3));
+  CHECK(read_image(path).width == 9);
+  CHECK(dir.entries() == 1);
+}
+
+TEST_CASE("write_image errors", "[image]") {
+  TempDir dir;
+  const Image img = gradient_image(2, 2, 3);
+  SECTION("missing directory") {
+    const std::string path = dir.file("no/such/dir/x.png");
+    CHECK_THROWS_AS(write_image(path, img), InputError);
+    CHECK(dir.entries() == 0);
+  }
+  SECTION("unknown extension") {
+    CHECK_THROWS_AS(write_image(dir.file("x.notanimage"), img), InputError);
+    CHECK_THROWS_AS(write_image(dir.file("noextension"), img), InputError);
+    CHECK(dir.entries() == 0);
+  }
+  SECTION("inconsistent image") {
+    Image bad(2, 2, 3);
+    bad.pixels.pop_back();
+    CHECK_THROWS_AS(write_image(dir.file("x.png"), bad), Error);
+    CHECK(dir.entries() == 0);
+  }
+}
+
+TEST_CASE("read_image errors name the file", "[image]") {
+  TempDir dir;
+  SECTION("missing file") {
+    const std::string path = dir.file("missing.png");
+    try {
+      read_image(path);
+      FAIL("no exception");
+    } catch (const InputError& e) {
+      CHECK(e.file() == path);
+      CHECK(std::string(e.what()).find("not found") != std::string::npos);
+    }
+  }
+  SECTION("not an image") {
+    const std::string path = dir.file("garbage.png");
+    std::ofstream(path) << "this is not a PNG file\n";
+    try {
+      read_image(path);
+      FAIL("no exception");
+    } catch (const InputError& e) {
+      CHECK(e.file() == path);
+      CHECK(std::string(e.what()).find('\n') == std::string::npos);
+    }
+  }
+  SECTION("truncated image") {
+    const std::string path = dir.file("big.png");
+    Image img(64, 64, 3);
+    for (std::size_t i = 0; i < img.pixels.size(); ++i)
+      img.pixels[i] = static_cast<float>((i * 7919) % 256) / 255;
+    write_image(path, img);
+    fs::resize_file(path, fs::file_size(path) / 2);
+    CHECK_THROWS_AS(read_image(path), InputError);
+  }
+  SECTION("directory") {
+    CHECK_THROWS_AS(read_image(dir.path.string()), InputError);
+  }
+}
+
+TEST_CASE("bilinear lookup", "[image]") {
+  // 2×2 grey image; rows top first, so v = 1 is the top row.
+  Image img(2, 2, 1);
+  img.at(0, 0, 0) = 0.0f;  // top left
+  img.at(1, 0, 0) = 1.0f;  // top right
+  img.at(0, 1, 0) = 2.0f;  // bottom left
+  img.at(1, 1, 0) = 3.0f;  // bottom right
+  float v = -1;
+  sample_bilinear(img, 0.5, 0.5, &v);
+  CHECK(v == Approx(1.5));
+  sample_bilinear(img, 0.25, 0.75, &v);  // top-left texel centre
+  CHECK(v == Approx(0.0));
+  sample_bilinear(img, 0.75, 0.25, &v);  // bottom-right texel centre
+  CHECK(v == Approx(3.0));
+  sample_bilinear(img, -5.0, 0.25, &v, Wrap::Clamp);
+  CHECK(v == Approx(2.0));
+  sample_bilinear(img, 1.25, 0.25, &v, Wrap::Repeat);  // same as u = 0.25
+  CHECK(v == Approx(2.0));
+}

@@ -1,0 +1,637 @@
+#include "isochart/io.h"
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "isochart/error.h"
+#include "isochart/io_test_util.h"
+
+using namespace isochart;
+using namespace io_test;
+
+namespace {
+
+std::string load_error(const std::string& path, const LoadOptions& o = {}) {
+  try {
+    load_mesh(path, o);
+  } catch (const InputError& e) {
+    CHECK(e.file() == path);
+    return e.what();
+  }
+  return "";
+}
+
+// A GLB container around a JSON document and a binary chunk.
+std::string glb_container(const std::string& json_text, std::string bin) {
+  std::string j = json_text;
+  while (j.size() % 4) j += ' ';
+  while (bin.size() % 4) bin += '\0';
+  Bytes b;
+  b.put<std::uint32_t>(0x46546C67)
+      .put<std::uint32_t>(2)
+      .put<std::uint32_t>(static_cast<std::uint32_t>(12 + 8 + j.size() + 8 + bin.size()));
+  b.put<std::uint32_t>(static_cast<std::uint32_t>(j.size())).put<std::uint32_t>(0x4E4F534A);
+  b.data += j;
+  b.put<std::uint32_t>(static_cast<std::uint32_t>(bin.size())).put<std::uint32_t>(0x004E4942);
+  b.data += bin;
+  return b.data;
+}
+
+// The closed cube with every attribute: per-vertex normals and colours, one UV chart per
+// side (seams on every cube edge) and one group per side.
+Mesh attributed_cube() {
+  std::vector<Vec3d> p;
+  for (int i = 0; i < 8; ++i) p.push_back({double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1)});
+  const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  Mesh m;
+  m.positions = p;
+  for (int q = 0; q < 6; ++q) {
+    const int base = static_cast<int>(m.uvs.size());
+    const double u0 = 0.1 + 0.15 * q;
+    m.uvs.push_back({u0, 0.1});
+    m.uvs.push_back({u0 + 0.1, 0.1});
+    m.uvs.push_back({u0 + 0.1, 0.3});
+    m.uvs.push_back({u0, 0.3});
+    m.faces.push_back({quads[q][0], quads[q][1], quads[q][2]});
+    m.faces.push_back({quads[q][0], quads[q][2], quads[q][3]});
+    m.face_uvs.push_back({base, base + 1, base + 2});
+    m.face_uvs.push_back({base, base + 2, base + 3});
+    m.face_groups.push_back(q);
+    m.face_groups.push_back(q);
+  }
+  for (const auto& x : p) {
+    m.normals.push_back(normalized(x - Vec3d{0.5, 0.5, 0.5}));
+    m.colors.push_back({x.x * 0.8 + 0.1, x.y * 0.6, 0.3 + 0.2 * x.z});
+  }
+  return m;
+}
+
+// Per corner, the two meshes have the same position, UV, normal and colour (within `tol`),
+// and the same face groups.
+void check_same_corners(const Mesh& a, const Mesh& b, double tol, bool groups, bool colors_uchar = false) {
+  REQUIRE(a.num_faces() == b.num_faces());
+  REQUIRE(b.has_uvs() == a.has_uvs());
+  REQUIRE(b.has_normals() == a.has_normals());
+  REQUIRE(b.has_colors() == a.has_colors());
+  const double ctol = colors_uchar ? 0.5 / 255 + 1e-9 : tol;
+  for (int f = 0; f < a.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int va = a.faces[f][k], vb = b.faces[f][k];
+      CHECK(norm(a.positions[va] - b.positions[vb]) <= tol);
+      if (a.has_uvs()) CHECK(norm(a.uvs[a.face_uvs[f][k]] - b.uvs[b.face_uvs[f][k]]) <= tol);
+      if (a.has_normals()) CHECK(norm(a.normals[va] - b.normals[vb]) <= tol);
+      if (a.has_colors()) CHECK(norm(a.colors[va] - b.colors[vb]) <= std::sqrt(3.0) * ctol);
+    }
+  if (groups) CHECK(a.face_groups == b.face_groups);
+}
+
+}  // namespace
+
+// ---- Formats and dispatch ------------------------------------------------------------------
+
+TEST_CASE("format comes from the extension", "[io]") {
+  CHECK(format_from_path("a/b.OBJ") == MeshFormat::Obj);
+  CHECK(format_from_path("x.off") == MeshFormat::Off);
+  CHECK(format_from_path("x.Ply") == MeshFormat::Ply);
+  CHECK(format_from_path("x.gltf") == MeshFormat::Gltf);
+  CHECK(format_from_path("x.glb") == MeshFormat::Glb);
+  CHECK(format_from_path("builtin:sphere") == MeshFormat::Builtin);
+  CHECK_THROWS_WITH(format_from_path("mesh.stl"), Catch::Contains("unknown mesh format '.stl'"));
+  CHECK_THROWS_WITH(format_from_path("dir.v2/mesh"), Catch::Contains("no file extension"));
+}
+
+TEST_CASE("built-in meshes go through make_builtin", "[io]") {
+  // An unknown name is make_builtin's InputError, whatever the built-ins are.
+  CHECK_THROWS_AS(load_mesh("builtin:no_such_mesh"), InputError);
+}
+
+TEST_CASE("file-level problems are InputErrors", "[io]") {
+  TempDir d;
+  CHECK_THAT(load_error(d.file("missing.obj")), Catch::Contains("cannot open file"));
+  fs::create_directory(d.file("dir.obj"));
+  CHECK_THAT(load_error(d.file("dir.obj")), Catch::Contains("is a directory"));
+  CHECK_THAT(load_error(d.write("empty.off", "")), Catch::Contains("file is empty"));
+}
+
+// ---- OBJ -----------------------------------------------------------------------------------
+
+TEST_CASE("OBJ: corner forms, relative indices, polygons", "[io]") {
+  TempDir d;
+  const std::string path = d.write("a.obj",
+                                   "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 1\n"
+                                   "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                                   "vn 0 0 -1\n"
+                                   "f 1/1/1 4/4/1 3/3/1 2/2/1\n"  // quad, v/vt/vn
+                                   "f 1/1 2/2 5/3\n"              // v/vt
+                                   "f -4/-3 -3/-2 -1/-1\n"        // relative
+                                   "f 3/3 4/4 5/1\n"
+                                   "f 4/4 1/1 5/2\n");
+  const RawMesh raw = read_raw_mesh(path);
+  REQUIRE(raw.polygons.size() == 5);
+  CHECK(raw.polygons[0] == std::vector<int>{0, 3, 2, 1});
+  CHECK(raw.polygons[2] == std::vector<int>{1, 2, 4});
+  CHECK(raw.polygon_uvs[2] == std::vector<int>{1, 2, 3});
+  CHECK(raw.normals.empty());  // only the quad's corners name normals
+  REQUIRE(raw.warnings.size() == 1);
+  CHECK_THAT(raw.warnings[0], Catch::Contains("normals ignored"));
+
+  const LoadResult r = load_mesh(path);
+  CHECK(r.report.polygons == 1);
+  CHECK(r.mesh.num_faces() == 6);
+  CHECK(Topology(r.mesh).boundary_loops().empty());
+  CHECK(Topology(r.mesh).genus() == 0);
+}
+
+TEST_CASE("OBJ: colours, normals, UVs and groups", "[io]") {
+  TempDir d;
+  const std::string path =
+      d.write("b.obj",
+              "# comment\r\nmtllib b.mtl\r\no body\r\n"
+              "v 0 0 0 255 0 0\r\nv 1 0 0 0 255 0\r\nv 0 1 0 0 0 255\r\nv 0 0 1 51 51 51\r\n"
+              "vn 0 0 -2\r\nvn 0 0 1\r\n"
+              "usemtl red\r\ns 1\r\ng first\r\n"
+              "f 1//1 3//1 2//1 # trailing comment\r\n"
+              "g second\r\nf 1//2 2//2 4//2\r\n"
+              "g first\r\nf 1//1 4//1 3//1\r\nf 2//2 3//2 4//2\r\n"
+              "l 1 2\r\n"
+              "vendorthing 1 2 3\r\n");
+  const RawMesh raw = read_raw_mesh(path);
+  REQUIRE(raw.colors.size() == 4);
+  CHECK(raw.colors[1].y == Approx(1.0));  // 0-255 colours are scaled
+  CHECK(raw.colors[3].x == Approx(0.2));
+  REQUIRE(raw.normals.size() == 4);
+  // Each vertex gets the normalized mean of its corners' normals: vertex 0 is named with
+  // (0, 0, -2) twice and (0, 0, 1) once.
+  CHECK(raw.normals[0] == Vec3d{0, 0, -1});
+  CHECK(raw.normals[1] == Vec3d{0, 0, 1});
+  // Ids by first use: "body" names no face, "first" and "second" do.
+  CHECK(raw.polygon_groups == std::vector<int>{0, 1, 0, 0});
+  REQUIRE(raw.warnings.size() == 2);
+  CHECK_THAT(raw.warnings[0], Catch::Contains("ignored 1 line and point elements"));
+  CHECK_THAT(raw.warnings[1], Catch::Contains("'vendorthing' on line 20"));
+}
+
+TEST_CASE("OBJ: faces without texture coordinates next to faces with them get (0, 0)", "[io]") {
+  TempDir d;
+  const RawMesh raw = read_raw_mesh(
+      d.write("c.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0.5 0.5\nf 1/1 3/1 2/1\nf 1 2 4\n"));
+  REQUIRE(raw.polygon_uvs.size() == 2);
+  CHECK(raw.uvs[raw.polygon_uvs[1][0]] == Vec2d{0, 0});
+  CHECK_THAT(raw.warnings.at(0), Catch::Contains("1 faces have no texture coordinates"));
+}
+
+TEST_CASE("OBJ: parse errors name the line", "[io]") {
+  TempDir d;
+  const std::string head = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  auto err = [&](const std::string& body) { return load_error(d.write("bad.obj", head + body)); };
+  CHECK(err("v 1 2\n") == "line 4: expected 3 coordinates after 'v'");
+  CHECK(err("v 1 nan 2\n") == "line 4: coordinate 'nan' is not finite");
+  CHECK(err("v 1 2 1e999\n") == "line 4: '1e999' is not a number");
+  CHECK(err("f 1 2\n") == "line 4: face has 2 corners; a face needs at least 3");
+  CHECK(err("f 0 1 2\n") == "line 4: vertex index 0 is invalid (OBJ indices start at 1)");
+  CHECK_THAT(err("f -1 -2 -4\n"),
+             Catch::StartsWith("line 4: relative vertex index -4 reaches before the first vertex"));
+  CHECK(err("f 1 2 3\nf 1 2 9\nf 1 2 4\n") ==
+        "line 5: vertex index 9 is out of range (the file has 3 vertices)");
+  CHECK(err("f 1/1 2/1 3/1\n") ==
+        "line 4: texture coordinate index 1 is out of range (the file has 0 texture coordinates)");
+  CHECK_THAT(err("f 1/x 2 3\n"), Catch::Contains("line 4: '1/x' is not a face corner"));
+  CHECK_THAT(err("f 1/1/1/1 2 3\n"), Catch::Contains("is not a face corner"));
+  CHECK(err("vt 0 0\nf 1/1 2 3\n") == "line 5: face mixes corners with and without texture coordinates");
+  CHECK(err("\xff\xfe garbage\n") == "line 4: '\\xff\\xfe' is not an OBJ statement");
+  CHECK(err("v 1 2 3 4 5\n") == "line 4: expected x y z, x y z w or x y z r g b after 'v', found 5 numbers");
+  CHECK_THAT(err(std::string("v 1 2 3\0\n", 9)), Catch::Contains("line 4: unexpected binary data"));
+  CHECK(err("") == "mesh has no faces");
+}
+
+TEST_CASE("face limits are enforced", "[io]") {
+  TempDir d;
+  LoadOptions o;
+  o.max_faces = 3;
+  CHECK_THAT(
+      load_error(d.write("many.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 3\nf 1 2 3\nf 1 2 3\n"), o),
+      Catch::Contains("has 4 faces, more than the limit of 3"));
+  CHECK_THAT(
+      load_error(d.write("many.off", "OFF\n3 4 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n3 0 1 2\n3 0 1 2\n"),
+                 o),
+      Catch::Contains("has 4 faces, more than the limit of 3"));
+  // A hexagon is one face in the file but four triangles.
+  CHECK_THAT(
+      load_error(d.write("hex.obj", "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 2 0\nv -1 1 0\nf 1 2 3 4 5 6\n"),
+                 o),
+      Catch::Contains("has 4 faces, more than the limit of 3"));
+}
+
+// ---- OFF -----------------------------------------------------------------------------------
+
+TEST_CASE("OFF: header variants, comments, polygons and colours", "[io]") {
+  TempDir d;
+  SECTION("counts on the header line, comments, a quad") {
+    const RawMesh raw = read_raw_mesh(d.write("a.off",
+                                              "# made by hand\nOFF 5 2 0 # counts\n\n0 0 0\n1 0 0\n1 1 0\n"
+                                              "# a comment between vertices\n0 1 0\n0.5 0.5 1\n"
+                                              "4 0 1 2 3\n3 0 1 4 255 0 0\n"));
+    REQUIRE(raw.polygons.size() == 2);
+    CHECK(raw.polygons[0] == std::vector<int>{0, 1, 2, 3});
+    CHECK(raw.polygons[1] == std::vector<int>{0, 1, 4});
+    CHECK(raw.colors.empty());
+  }
+  SECTION("COFF with 0-255 colours") {
+    const RawMesh raw = read_raw_mesh(
+        d.write("c.off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 51 255\n3 0 1 2\n"));
+    REQUIRE(raw.colors.size() == 3);
+    CHECK(raw.colors[0].x == Approx(1.0));
+    CHECK(raw.colors[2].z == Approx(0.2));
+  }
+  SECTION("CNOFF with normals and [0, 1] colours") {
+    const RawMesh raw = read_raw_mesh(d.write(
+        "n.off", "CNOFF\n3 1 0\n0 0 0 0 0 1 0.5 0.25 1\n1 0 0 0 0 1 0 0 0\n0 1 0 0 0 1 1 1 1\n3 0 1 2\n"));
+    REQUIRE(raw.normals.size() == 3);
+    CHECK(raw.normals[1] == Vec3d{0, 0, 1});
+    CHECK(raw.colors[0] == Vec3d{0.5, 0.25, 1});
+  }
+  SECTION("STOFF texture coordinates") {
+    const RawMesh raw =
+        read_raw_mesh(d.write("t.off", "STOFF\n3 1 0\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n"));
+    REQUIRE(raw.polygon_uvs.size() == 1);
+    CHECK(raw.uvs[raw.polygon_uvs[0][2]] == Vec2d{0, 1});
+  }
+}
+
+TEST_CASE("OFF: errors name the line", "[io]") {
+  TempDir d;
+  auto err = [&](const std::string& text) { return load_error(d.write("bad.off", text)); };
+  CHECK_THAT(err("PLY\n3 1 0\n"), Catch::Contains("line 1: expected an OFF header"));
+  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n") == "line 4: vertex 1: expected 3 numbers, found 2");
+  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n") ==
+        "line 6: vertex index 5 is out of range (the file has 3 vertices)");
+  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n") ==
+        "line 6: face has 2 corners; a face needs at least 3");
+  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n") ==
+        "line 6: face declares 4 corners but lists 3 indices");
+  CHECK(err("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 # padding, so the size check passes\n") ==
+        "unexpected end of file after 1 of 2 faces (truncated)");
+  CHECK_THAT(err("OFF\n2000000000 2000000000 0\n0 0 0\n"),
+             Catch::Contains("line 2: header declares 2000000000 vertices"));
+  CHECK_THAT(err("OFF\n-3 1 0\n"), Catch::Contains("out of range"));
+  CHECK(err("OFF\n3 1 0\n0 0 inf\n1 0 0\n0 1 0\n3 0 1 2\n") == "line 3: value 'inf' is not finite");
+  CHECK(err("OFF BINARY\n") == "line 1: binary OFF is not supported");
+}
+
+// ---- PLY -----------------------------------------------------------------------------------
+
+namespace {
+
+// A tetrahedron with an unknown vertex property, an unknown element between vertices and
+// faces, a list-then-scalar face record and a trailing edge element, in the given format.
+std::string ply_tetra(const std::string& format) {
+  const bool ascii = format == "ascii";
+  std::string h = "ply\nformat " + format +
+                  " 1.0\ncomment test\n"
+                  "element vertex 4\nproperty double x\nproperty double y\nproperty double z\n"
+                  "property float confidence\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+                  "property float nx\nproperty float ny\nproperty float nz\n"
+                  "element material 1\nproperty list uchar float weights\nproperty int id\n"
+                  "element face 4\nproperty list ushort uint vertex_indices\nproperty int flags\n"
+                  "property list uchar float texcoord\n"
+                  "element edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n";
+  const double p[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const int f[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  if (ascii) {
+    std::ostringstream s;
+    for (int v = 0; v < 4; ++v)
+      s << p[v][0] << " " << p[v][1] << " " << p[v][2] << " 0.5 " << 50 * v << " 255 0 0 0 1\n";
+    s << "2 0.25 0.75 7\n";
+    for (int i = 0; i < 4; ++i)
+      s << "3 " << f[i][0] << " " << f[i][1] << " " << f[i][2] << " -1 6 0 0 1 0 0." << i + 1 << " 1\n";
+    s << "0 1\n";
+    return h + s.str();
+  }
+  Bytes b;
+  b.big_endian = format == "binary_big_endian";
+  for (int v = 0; v < 4; ++v) {
+    b.put(p[v][0]).put(p[v][1]).put(p[v][2]).put(0.5f);
+    b.put<std::uint8_t>(static_cast<std::uint8_t>(50 * v)).put<std::uint8_t>(255).put<std::uint8_t>(0);
+    b.put(0.0f).put(0.0f).put(1.0f);
+  }
+  b.put<std::uint8_t>(2).put(0.25f).put(0.75f).put<std::int32_t>(7);
+  for (int i = 0; i < 4; ++i) {
+    b.put<std::uint16_t>(3);
+    for (int k = 0; k < 3; ++k) b.put<std::uint32_t>(static_cast<std::uint32_t>(f[i][k]));
+    b.put<std::int32_t>(-1).put<std::uint8_t>(6);
+    b.put(0.0f).put(0.0f).put(1.0f).put(0.0f).put(static_cast<float>(0.1 * (i + 1))).put(1.0f);
+  }
+  b.put<std::int32_t>(0).put<std::int32_t>(1);
+  return h + b.data;
+}
+
+}  // namespace
+
+TEST_CASE("PLY: ascii, little and big endian read the same", "[io]") {
+  TempDir d;
+  for (const std::string format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+    INFO(format);
+    const RawMesh raw = read_raw_mesh(d.write(format + ".ply", ply_tetra(format)));
+    REQUIRE(raw.positions.size() == 4);
+    CHECK(raw.positions[3] == Vec3d{0, 0, 1});
+    REQUIRE(raw.polygons.size() == 4);
+    CHECK(raw.polygons[3] == std::vector<int>{1, 2, 3});
+    REQUIRE(raw.colors.size() == 4);
+    CHECK(raw.colors[2].x == Approx(100.0 / 255));
+    CHECK(raw.colors[2].y == Approx(1.0));
+    REQUIRE(raw.normals.size() == 4);
+    CHECK(raw.normals[1] == Vec3d{0, 0, 1});
+    REQUIRE(raw.polygon_uvs.size() == 4);
+    CHECK(raw.uvs[raw.polygon_uvs[2][2]].x == Approx(0.3).epsilon(1e-6));
+    CHECK(raw.uvs[raw.polygon_uvs[2][2]].y == 1.0);
+    const LoadResult r = load_mesh(d.file(format + ".ply"));
+    CHECK(r.report.warnings.empty());
+    CHECK(r.mesh.num_faces() == 4);
+  }
+}
+
+TEST_CASE("PLY: per-vertex texture coordinates and the vertex_index name", "[io]") {
+  TempDir d;
+  const RawMesh raw =
+      read_raw_mesh(d.write("uv.ply",
+                            "ply\r\nformat ascii 1.0\r\nelement vertex 3\r\nproperty float x\r\n"
+                            "property float y\r\nproperty float z\r\nproperty float s\r\n"
+                            "property float t\r\nelement face 1\r\n"
+                            "property list uchar int vertex_index\r\nend_header\r\n"
+                            "0 0 0 0 0\r\n1 0 0 1 0\r\n0 1 0 0 1\r\n3 0 1 2\r\n"));
+  REQUIRE(raw.polygon_uvs.size() == 1);
+  CHECK(raw.uvs[raw.polygon_uvs[0][1]] == Vec2d{1, 0});
+}
+
+TEST_CASE("PLY: errors name the line or the element", "[io]") {
+  TempDir d;
+  const std::string full = ply_tetra("binary_little_endian");
+  CHECK(load_error(d.write("t1.ply", full.substr(0, full.size() - 20))) ==
+        "face 3: list of 6 values runs past the end of the file (truncated)");
+  CHECK(load_error(d.write("t0.ply", full.substr(0, full.size() - 3))) ==
+        "edge 0: unexpected end of file (truncated)");
+  const std::string header_end = "end_header\n";
+  const std::size_t body = full.find(header_end) + header_end.size();
+  CHECK_THAT(
+      load_error(d.write("t2.ply", full.substr(0, body + 40))),
+      Catch::Contains("header declares 4 vertex elements, but only 40 bytes of data follow (truncated"));
+  CHECK_THAT(load_error(d.write("t3.ply", full.substr(0, body - 5))), Catch::Contains("no end_header line"));
+  CHECK_THAT(load_error(d.write("huge.ply",
+                                "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\n"
+                                "property float x\nproperty float y\nproperty float z\nend_header\n0000")),
+             Catch::Contains("line 3: header declares 2000000000 vertex elements"));
+  CHECK_THAT(load_error(d.write("fmt.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n")),
+             Catch::Contains("line 2: unknown PLY format 'binary_middle_endian'"));
+  const std::string ascii_head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  CHECK(load_error(d.write("a1.ply", ascii_head + "0 0 0\n1 0\n0 1 0\n3 0 1 2\n")) ==
+        "line 11: vertex 1: expected more values on this line");
+  CHECK(load_error(d.write("a2.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 -2\n")) ==
+        "line 13: face 0: vertex index -2 is out of range");
+  CHECK(load_error(d.write("a3.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n")) ==
+        "face 0 refers to vertex 3, but there are only 3 vertices");
+  CHECK(load_error(d.write("a4.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n")) ==
+        "line 13: face 0: face has 2 corners; a face needs at least 3");
+  CHECK(load_error(d.write("a5.ply", ascii_head + "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n")) ==
+        "vertex 1 has a non-finite coordinate (1, nan, 0)");
+  CHECK_THAT(load_error(d.write("noply.ply", "solid stl\n")), Catch::Contains("not a PLY file"));
+}
+
+// ---- glTF ----------------------------------------------------------------------------------
+
+namespace {
+
+// One square (4 vertices with NORMAL and TEXCOORD_0) drawn three ways: mesh 0 holds a
+// TRIANGLES primitive (ushort indices) and a TRIANGLE_FAN one (uint indices) on the same
+// accessors; mesh 1 a TRIANGLE_STRIP (ubyte indices). Node 0 (mesh 0) is moved by +10 in x;
+// its child node 1 (mesh 1) mirrors x. Node 2 is not in the scene.
+struct GltfSample {
+  std::string bin;
+  nlohmann::json doc;
+};
+
+GltfSample gltf_sample() {
+  Bytes b;
+  const float pos[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  for (const auto& p : pos) b.put(p[0]).put(p[1]).put(p[2]);                             // 0..48
+  for (int i = 0; i < 4; ++i) b.put(0.0f).put(0.0f).put(1.0f);                           // 48..96
+  for (const auto& p : pos) b.put(p[0] * 0.5f).put(p[1] * 0.25f);                        // 96..128
+  for (int i : {0, 1, 2, 0, 2, 3}) b.put<std::uint16_t>(static_cast<std::uint16_t>(i));  // 128..140
+  for (int i : {0, 1, 3, 2}) b.put<std::uint8_t>(static_cast<std::uint8_t>(i));          // 140..144
+  for (int i : {0, 1, 2, 3}) b.put<std::uint32_t>(static_cast<std::uint32_t>(i));        // 144..160
+  using nlohmann::json;
+  json doc = {
+      {"asset", {{"version", "2.0"}}},
+      {"scene", 0},
+      {"scenes", {{{"nodes", {0}}}}},
+      {"nodes",
+       {{{"mesh", 0}, {"translation", {10, 0, 0}}, {"children", {1}}},
+        {{"mesh", 1}, {"scale", {-1, 1, 1}}},
+        {{"mesh", 0}}}},
+      {"bufferViews",
+       {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 48}},
+        {{"buffer", 0}, {"byteOffset", 48}, {"byteLength", 48}},
+        {{"buffer", 0}, {"byteOffset", 96}, {"byteLength", 32}},
+        {{"buffer", 0}, {"byteOffset", 128}, {"byteLength", 12}},
+        {{"buffer", 0}, {"byteOffset", 140}, {"byteLength", 4}},
+        {{"buffer", 0}, {"byteOffset", 144}, {"byteLength", 16}}}},
+      {"accessors",
+       {{{"bufferView", 0},
+         {"componentType", 5126},
+         {"count", 4},
+         {"type", "VEC3"},
+         {"min", {0, 0, 0}},
+         {"max", {1, 1, 0}}},
+        {{"bufferView", 1}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}},
+        {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
+        {{"bufferView", 3}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}},
+        {{"bufferView", 4}, {"componentType", 5121}, {"count", 4}, {"type", "SCALAR"}},
+        {{"bufferView", 5}, {"componentType", 5125}, {"count", 4}, {"type", "SCALAR"}}}},
+  };
+  const json attrs = {{"POSITION", 0}, {"NORMAL", 1}, {"TEXCOORD_0", 2}};
+  doc["meshes"] = {
+      {{"primitives",
+        {{{"attributes", attrs}, {"indices", 3}}, {{"attributes", attrs}, {"indices", 5}, {"mode", 6}}}}},
+      {{"primitives", {{{"attributes", attrs}, {"indices", 4}, {"mode", 5}}}}}};
+  return {b.data, doc};
+}
+
+std::string gltf_text(const GltfSample& s) {
+  nlohmann::json doc = s.doc;
+  doc["buffers"] = {
+      {{"byteLength", s.bin.size()}, {"uri", "data:application/octet-stream;base64," + base64(s.bin)}}};
+  return doc.dump();
+}
+
+std::string glb_of(const GltfSample& s) {
+  nlohmann::json doc = s.doc;
+  doc["buffers"] = {{{"byteLength", s.bin.size()}}};
+  return glb_container(doc.dump(), s.bin);
+}
+
+}  // namespace
+
+TEST_CASE("glTF: primitives, modes, index types and transforms", "[io]") {
+  TempDir d;
+  const GltfSample s = gltf_sample();
+  const RawMesh a = read_raw_mesh(d.write("s.gltf", gltf_text(s)));
+  const RawMesh b = read_raw_mesh(d.write("s.glb", glb_of(s)));
+  for (const RawMesh* r : {&a, &b}) {
+    // Mesh 0's two primitives share vertices (same accessors); mesh 1 has its own.
+    REQUIRE(r->positions.size() == 8);
+    CHECK(r->positions[2] == Vec3d{11, 1, 0});
+    CHECK(r->positions[6] == Vec3d{9, 1, 0});  // mirrored child: 10 - 1
+    REQUIRE(r->polygons.size() == 6);
+    CHECK(r->polygons[0] == std::vector<int>{0, 1, 2});
+    CHECK(r->polygons[3] == std::vector<int>{0, 2, 3});  // fan
+    CHECK(r->polygons[4] == std::vector<int>{4, 7, 5});  // strip (0,1,3) mirrored
+    CHECK(r->polygon_groups == std::vector<int>{0, 0, 1, 1, 2, 2});
+    REQUIRE(r->uvs.size() == 8);
+    CHECK(r->uvs[2] == Vec2d{0.5, 0.75});  // glTF v is flipped to OBJ's convention
+    REQUIRE(r->normals.size() == 8);
+    // Every face's winding agrees with its vertex normals, the mirrored ones included.
+    for (const auto& p : r->polygons) {
+      const Vec3d n = cross(r->positions[p[1]] - r->positions[p[0]], r->positions[p[2]] - r->positions[p[0]]);
+      CHECK(dot(n, r->normals[p[0]]) > 0);
+    }
+  }
+  CHECK(a.positions == b.positions);
+  CHECK(a.polygons == b.polygons);
+
+  // The same with the buffer in a file beside the .gltf.
+  nlohmann::json doc = s.doc;
+  doc["buffers"] = {{{"byteLength", s.bin.size()}, {"uri", "s.bin"}}};
+  d.write("s.bin", s.bin);
+  const RawMesh c = read_raw_mesh(d.write("external.gltf", doc.dump()));
+  CHECK(c.positions == a.positions);
+  CHECK(c.polygons == a.polygons);
+  fs::remove(d.file("s.bin"));
+  CHECK_THAT(load_error(d.file("external.gltf")), Catch::StartsWith("invalid glTF"));
+}
+
+TEST_CASE("glTF: malformed files are clear errors", "[io]") {
+  TempDir d;
+  GltfSample s = gltf_sample();
+  CHECK_THAT(load_error(d.write("bad.gltf", "{ \"asset\": ")), Catch::StartsWith("invalid glTF"));
+  const std::string glb = glb_of(s);
+  CHECK_THAT(load_error(d.write("cut.glb", glb.substr(0, glb.size() / 2))),
+             Catch::StartsWith("invalid glTF"));
+  CHECK_THAT(load_error(d.write("junk.glb", "this is not a glb file at all")),
+             Catch::StartsWith("invalid glTF"));
+  s.doc["accessors"][0]["count"] = 400;
+  CHECK_THAT(load_error(d.write("count.glb", glb_of(s))),
+             Catch::Contains("mesh 0 primitive 0 POSITION (accessor 0) runs past the end of its bufferView"));
+  s = gltf_sample();
+  s.bin[128] = 9;  // first ushort index
+  CHECK_THAT(load_error(d.write("index.glb", glb_of(s))),
+             Catch::Contains("mesh 0 primitive 0: index 9 is out of range (4 vertices)"));
+  s = gltf_sample();
+  s.doc["nodes"][1]["children"] = {0};
+  CHECK_THAT(load_error(d.write("cycle.glb", glb_of(s))), Catch::Contains("node 0 is reached twice"));
+  s = gltf_sample();
+  s.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+  s.doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
+  CHECK_THAT(load_error(d.write("draco.glb", glb_of(s))), Catch::Contains("unsupported extension"));
+  LoadOptions o;
+  o.max_faces = 3;  // the fan would be faces 3 and 4
+  CHECK_THAT(load_error(d.write("limit.glb", glb_of(gltf_sample())), o),
+             Catch::Contains("has 4 faces, more than the limit of 3"));
+}
+
+// ---- Writers -------------------------------------------------------------------------------
+
+TEST_CASE("OBJ round trip keeps everything exactly", "[io]") {
+  TempDir d;
+  const Mesh m = attributed_cube();
+  save_mesh(m, d.file("cube.obj"));
+  const LoadResult r = load_mesh(d.file("cube.obj"));
+  CHECK(r.report.warnings.empty());
+  check_same_corners(m, r.mesh, 1e-12, true);
+  CHECK(r.mesh.positions == m.positions);
+  CHECK(d.entries() == std::vector<std::string>{"cube.obj"});
+}
+
+TEST_CASE("PLY round trips, binary and ASCII", "[io]") {
+  TempDir d;
+  const Mesh m = attributed_cube();
+  for (bool binary : {true, false}) {
+    SaveOptions o;
+    o.binary_ply = binary;
+    const std::string path = d.file(binary ? "b.ply" : "a.ply");
+    save_mesh(m, path, o);
+    CHECK(read_bytes(path).find(binary ? "format binary_little_endian" : "format ascii") !=
+          std::string::npos);
+    const LoadResult r = load_mesh(path);
+    CHECK(r.report.warnings.empty());
+    Mesh expect = m;
+    expect.face_groups.clear();  // PLY has no groups
+    check_same_corners(expect, r.mesh, 1e-7, false, true);
+  }
+}
+
+TEST_CASE("glb round trip, deterministic bytes", "[io]") {
+  TempDir d;
+  const Mesh m = attributed_cube();
+  save_mesh(m, d.file("a.glb"));
+  save_mesh(m, d.file("b.glb"));
+  CHECK(read_bytes(d.file("a.glb")) == read_bytes(d.file("b.glb")));
+  const LoadResult r = load_mesh(d.file("a.glb"));
+  CHECK(r.report.warnings.empty());
+  // Vertices are split at UV seams: every side of the cube is its own piece.
+  CHECK(r.mesh.num_vertices() == 24);
+  CHECK(r.report.components == 6);
+  check_same_corners(m, r.mesh, 1e-7, true);
+}
+
+TEST_CASE("textures: OBJ gets an MTL, glb embeds the image", "[io]") {
+  TempDir d;
+  const Mesh m = attributed_cube();
+  SaveOptions o;
+  o.texture = "atlas.png";
+  save_mesh(m, d.file("t.obj"), o);
+  CHECK(d.entries() == std::vector<std::string>{"t.mtl", "t.obj"});
+  const std::string obj = read_bytes(d.file("t.obj"));
+  CHECK(obj.find("mtllib t.mtl\n") != std::string::npos);
+  CHECK(obj.find("usemtl material0\n") != std::string::npos);
+  CHECK(read_bytes(d.file("t.mtl")).find("map_Kd atlas.png\n") != std::string::npos);
+  CHECK(load_mesh(d.file("t.obj")).mesh.num_faces() == 12);
+
+  const std::string png = std::string(ISOCHARTS_SHARED_DATA) + "/exemplars/bricks.png";
+  o.texture = png;
+  save_mesh(m, d.file("t.glb"), o);
+  const std::string glb = read_bytes(d.file("t.glb"));
+  CHECK(glb.find(read_bytes(png)) != std::string::npos);
+  CHECK(glb.find("\"image/png\"") != std::string::npos);
+  CHECK(glb.find("baseColorTexture") != std::string::npos);
+  check_same_corners(m, load_mesh(d.file("t.glb")).mesh, 1e-7, true);
+
+  o.texture = d.write("not_an_image.png", "hello");
+  CHECK_THROWS_WITH(save_mesh(m, d.file("u.glb"), o), Catch::Contains("not a PNG or JPEG"));
+  o.texture = d.file("missing.png");
+  CHECK_THROWS_AS(save_mesh(m, d.file("u.glb"), o), InputError);
+  CHECK_FALSE(fs::exists(d.file("u.glb")));
+}
+
+TEST_CASE("writes are atomic and leave nothing behind on failure", "[io]") {
+  TempDir d;
+  const Mesh m = attributed_cube();
+  CHECK_THROWS_WITH(save_mesh(m, d.file("mesh.off")), Catch::Contains("cannot write this format"));
+  CHECK_THROWS_AS(save_mesh(m, d.file("no/such/dir/mesh.obj")), InputError);
+  // The target is a directory: writing the temp file works, the rename fails.
+  fs::create_directory(d.file("taken.ply"));
+  CHECK_THROWS_WITH(save_mesh(m, d.file("taken.ply")), Catch::Contains("cannot write"));
+  CHECK(d.entries() == std::vector<std::string>{"taken.ply"});
+  // Overwriting replaces the old content.
+  write_file_atomic(d.file("x.txt"), "old content that is longer");
+  write_file_atomic(d.file("x.txt"), "new");
+  CHECK(read_bytes(d.file("x.txt")) == "new");
+  CHECK(d.entries() == std::vector<std::string>{"taken.ply", "x.txt"});
+}

@@ -1,0 +1,337 @@
+#include "isochart/render.h"
+
+#include <sys/wait.h>
+#include <tbb/task_arena.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "isochart/builtin.h"
+#include "isochart/error.h"
+#include "isochart/image.h"
+
+using namespace isochart;
+namespace fs = std::filesystem;
+
+namespace {
+
+bool is_white(const Image& img, int x, int y) {
+  for (int c = 0; c < 3; ++c)
+    if (img.at(x, y, c) < 0.999f) return false;
+  return true;
+}
+
+// Chromaticity: a colour's share of each channel; greys sit at (1/3, 1/3, 1/3).
+Vec3d chroma(const Image& img, int x, int y) {
+  const Vec3d c{img.at(x, y, 0), img.at(x, y, 1), img.at(x, y, 2)};
+  const double s = c.x + c.y + c.z;
+  return s > 0 ? c / s : Vec3d{};
+}
+
+// Number of distinct hues among the saturated pixels: hues binned by 30°, clusters are runs of
+// bins holding at least 1% of those pixels. Lighting, highlights and anti-aliasing against
+// white change saturation and brightness, not hue, so a flat-coloured chart is one cluster.
+int hue_clusters(const Image& img) {
+  const double pi = 3.14159265358979323846;
+  int bins[12] = {0}, total = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      const double r = img.at(x, y, 0), g = img.at(x, y, 1), b = img.at(x, y, 2);
+      if (std::max({r, g, b}) - std::min({r, g, b}) < 0.1) continue;
+      double hue = std::atan2(std::sqrt(3.0) * (g - b), 2 * r - g - b) * 180 / pi;
+      if (hue < 0) hue += 360;
+      ++bins[std::min(11, static_cast<int>(hue / 30))];
+      ++total;
+    }
+  bool on[12];
+  for (int i = 0; i < 12; ++i) on[i] = total > 0 && bins[i] * 100 >= total;
+  int clusters = 0;
+  for (int i = 0; i < 12; ++i) clusters += on[i] && !on[(i + 11) % 12];
+  if (clusters == 0 && on[0]) clusters = 1;  // every bin on
+  return clusters;
+}
+
+int count_pixels(const Image& img, float below) {
+  int n = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (img.at(x, y, 0) < below && img.at(x, y, 1) < below && img.at(x, y, 2) < below) ++n;
+  return n;
+}
+
+// The unit sphere cut into two hemispheres (z > 0 and z ≤ 0 by face centroid), each
+// projected orthographically into one half of the unit square: a two-chart atlas.
+Mesh two_chart_sphere() {
+  Mesh m = make_builtin("sphere");
+  m.face_uvs.resize(m.faces.size());
+  m.face_groups.resize(m.faces.size());
+  for (int f = 0; f < m.num_faces(); ++f) {
+    const Face& t = m.faces[f];
+    const bool upper = m.positions[t[0]].z + m.positions[t[1]].z + m.positions[t[2]].z > 0;
+    m.face_groups[f] = upper ? 0 : 1;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3d& p = m.positions[t[k]];
+      // Seen from -z the lower half is mirrored, so flip x to keep it counter-clockwise.
+      const double u = upper ? 0.25 + 0.24 * p.x : 0.75 - 0.24 * p.x;
+      m.uvs.push_back({u, 0.5 + 0.24 * p.y});
+      m.face_uvs[f][k] = static_cast<int>(m.uvs.size()) - 1;
+    }
+  }
+  return m;
+}
+
+// A unit square in the xy-plane facing +z, UVs over [0, 1]².
+Mesh textured_quad() {
+  Mesh m;
+  m.positions = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+  m.faces = {{0, 1, 2}, {0, 2, 3}};
+  m.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  m.face_uvs = m.faces;
+  return m;
+}
+
+Image checkerboard(int size, int squares) {
+  Image img(size, size, 3);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const bool dark = ((x * squares / size) + (y * squares / size)) % 2 == 0;
+      for (int c = 0; c < 3; ++c) img.at(x, y, c) = dark ? 0.0f : 1.0f;
+    }
+  return img;
+}
+
+}  // namespace
+
+TEST_CASE("render of a sphere covers the centre and leaves the corners white", "[render]") {
+  RenderOptions o;
+  o.width = 160;
+  o.height = 120;
+  const Image img = render_mesh(make_builtin("sphere"), o);
+  REQUIRE(img.width == 160);
+  REQUIRE(img.height == 120);
+  REQUIRE(img.channels == 3);
+  CHECK_FALSE(is_white(img, 80, 60));
+  CHECK(img.at(80, 60, 0) > 0.2f);  // lit, not black
+  for (auto [x, y] : {std::pair{0, 0}, {159, 0}, {0, 119}, {159, 119}}) CHECK(is_white(img, x, y));
+  // Shaded mode is grey.
+  CHECK(hue_clusters(img) == 0);
+}
+
+TEST_CASE("several views are composed side by side", "[render]") {
+  RenderOptions o;
+  o.views = 4;
+  o.width = 400;
+  o.height = 100;
+  const Image img = render_mesh(make_builtin("torus"), o);
+  REQUIRE(img.width == 400);
+  REQUIRE(img.height == 100);
+  for (int v = 0; v < 4; ++v) {
+    // Each column shows the torus: its middle row has surface, its left and right edges none.
+    int covered = 0;
+    for (int x = v * 100; x < (v + 1) * 100; ++x) covered += !is_white(img, x, 50);
+    CHECK(covered > 50);
+    for (int y = 0; y < 100; ++y) {
+      CHECK(is_white(img, v * 100, y));
+      CHECK(is_white(img, v * 100 + 99, y));
+    }
+  }
+  o.views = 8;
+  CHECK(render_mesh(make_builtin("torus"), o).width == 400);
+}
+
+TEST_CASE("transparent background gives RGBA with alpha coverage", "[render]") {
+  RenderOptions o;
+  o.width = o.height = 64;
+  o.transparent = true;
+  const Image img = render_mesh(make_builtin("sphere"), o);
+  REQUIRE(img.channels == 4);
+  CHECK(img.at(32, 32, 3) == 1.0f);
+  CHECK(img.at(0, 0, 3) == 0.0f);
+}
+
+TEST_CASE("chart colouring distinguishes adjacent charts", "[render]") {
+  const Mesh m = two_chart_sphere();
+  const std::vector<Vec3d> colors = chart_colors(m, m.face_groups, 2);
+  REQUIRE(colors.size() == 2);
+  CHECK(colors[0] != colors[1]);
+
+  RenderOptions o;
+  o.width = o.height = 128;
+  o.color = ColorMode::Charts;
+  // With +z as the model's up the front view looks along -x: the upper hemisphere fills the
+  // top half of the image, the lower one the bottom half.
+  o.up = {0, 0, 1};
+  const Image img = render_mesh(m, o);
+  CHECK(hue_clusters(img) == 2);
+
+  // Without groups the UV charts are used, with the same result.
+  Mesh no_groups = m;
+  no_groups.face_groups.clear();
+  const Image from_uv = render_mesh(no_groups, o);
+  CHECK(from_uv.pixels == img.pixels);
+
+  // Explicit per-face charts override the groups: one chart is one colour.
+  o.face_charts.assign(m.faces.size(), 7);
+  CHECK(hue_clusters(render_mesh(m, o)) == 1);
+}
+
+TEST_CASE("textured render shows both colours of a checkerboard", "[render]") {
+  const Mesh quad = textured_quad();
+  const Image tex = checkerboard(64, 8);
+  RenderOptions o;
+  o.width = o.height = 128;
+  o.color = ColorMode::Textured;
+  o.texture = &tex;
+  const Image img = render_mesh(quad, o);
+  const int dark = count_pixels(img, 0.2f);
+  int bright = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) bright += !is_white(img, x, y) && img.at(x, y, 0) > 0.6f;
+  CHECK(dark > 1000);
+  CHECK(bright > 1000);
+  // The dark squares come from the texture: the untextured quad has none.
+  o.color = ColorMode::Shaded;
+  CHECK(count_pixels(render_mesh(quad, o), 0.2f) == 0);
+}
+
+TEST_CASE("textured interpolation is perspective-correct", "[render]") {
+  // A long strip on the ground (y = 0) receding from the front camera, which looks 15° down:
+  // the near end (z = 4) is at the bottom of the image, the far end (z = -4) at the top.
+  // u runs along it and the texture is black for u < 1/2, white above. Perspective-correct
+  // interpolation puts the switch at the strip's 3D midpoint, which projects well above the
+  // middle of the strip's image (the far half is foreshortened); affine interpolation would
+  // put it at the middle.
+  Mesh strip;
+  strip.positions = {{-0.2, 0, 4}, {0.2, 0, 4}, {0.2, 0, -4}, {-0.2, 0, -4}};
+  strip.faces = {{0, 1, 2}, {0, 2, 3}};
+  strip.uvs = {{0, 0}, {0, 1}, {1, 1}, {1, 0}};
+  strip.face_uvs = strip.faces;
+  Image tex(64, 4, 3, 1.0f);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 32; ++x)
+      for (int c = 0; c < 3; ++c) tex.at(x, y, c) = 0.0f;
+  RenderOptions o;
+  o.width = 64;
+  o.height = 256;
+  o.supersample = 1;
+  o.transparent = true;  // alpha marks the strip
+  o.color = ColorMode::Textured;
+  o.texture = &tex;
+  const Image img = render_mesh(strip, o);
+  int top = -1, bottom = -1, edge = -1;
+  for (int y = 0; y < img.height; ++y)
+    if (img.at(32, y, 3) > 0.5f) {
+      if (top < 0) top = y;
+      bottom = y;
+    }
+  REQUIRE(top >= 0);
+  REQUIRE(bottom - top > 100);
+  for (int y = top; y <= bottom && edge < 0; ++y)
+    if (img.at(32, y, 0) < 0.1f) edge = y;  // first dark row from the far end
+  REQUIRE(edge > top);
+  // Projecting the strip's ends and midpoint with this camera puts the midpoint 12% of the
+  // strip's height above the middle.
+  const double middle = 0.5 * (top + bottom);
+  CHECK(edge < middle - 0.08 * (bottom - top));
+  CHECK(edge > middle - 0.16 * (bottom - top));
+}
+
+TEST_CASE("wireframe overlay draws dark edges", "[render]") {
+  RenderOptions o;
+  o.width = o.height = 200;
+  const Mesh m = make_builtin("sphere");
+  const int plain = count_pixels(render_mesh(m, o), 0.3f);
+  o.wireframe = true;
+  const int wired = count_pixels(render_mesh(m, o), 0.3f);
+  CHECK(wired > plain + 500);
+}
+
+TEST_CASE("rendering is deterministic for any thread count", "[render]") {
+  const Mesh m = make_builtin("creature");
+  RenderOptions o;
+  o.views = 4;
+  o.width = 320;
+  o.height = 80;
+  o.wireframe = true;
+  Image one, two;
+  tbb::task_arena(1).execute([&] { one = render_mesh(m, o); });
+  tbb::task_arena(2).execute([&] { two = render_mesh(m, o); });
+  CHECK(one.pixels == two.pixels);
+}
+
+TEST_CASE("UV layout draws charts on white with dark boundaries", "[render]") {
+  const Mesh m = two_chart_sphere();
+  const Image img = render_uv_layout(m, 256, 128);
+  REQUIRE(img.width == 256);
+  REQUIRE(img.height == 128);
+  REQUIRE(img.channels == 3);
+  CHECK(is_white(img, 0, 0));
+  CHECK(is_white(img, 255, 127));
+  // The two discs (centres at u = 1/4 and 3/4, v = 1/2) are filled in different colours.
+  const int w = 256, h = 128;
+  const int side = std::min(w, h);
+  auto pixel_of = [&](double u, double v) {
+    const double margin = 0.03 * side;
+    const double scale = (side - 2 * margin);
+    return std::pair<int, int>{static_cast<int>(0.5 * (w - scale) + u * scale),
+                               static_cast<int>(0.5 * (h - scale) + (1 - v) * scale)};
+  };
+  const auto [x0, y0] = pixel_of(0.25, 0.6);
+  const auto [x1, y1] = pixel_of(0.75, 0.6);
+  CHECK_FALSE(is_white(img, x0, y0));
+  CHECK_FALSE(is_white(img, x1, y1));
+  const Vec3d c0 = chroma(img, x0, y0), c1 = chroma(img, x1, y1);
+  CHECK(norm(c0 - c1) > 0.05);
+  CHECK(hue_clusters(img) == 2);
+  // Chart boundaries (the discs' rims) are dark.
+  CHECK(count_pixels(img, 0.3f) > 100);
+}
+
+TEST_CASE("render input errors", "[render]") {
+  const Mesh sphere = make_builtin("sphere");
+  RenderOptions o;
+  o.views = 0;
+  CHECK_THROWS_AS(render_mesh(sphere, o), InputError);
+  o.views = 9;
+  CHECK_THROWS_AS(render_mesh(sphere, o), InputError);
+  o = {};
+  o.width = 0;
+  CHECK_THROWS_AS(render_mesh(sphere, o), InputError);
+  o = {};
+  o.color = ColorMode::Charts;  // no groups, no UVs
+  CHECK_THROWS_AS(render_mesh(sphere, o), InputError);
+  o.color = ColorMode::Textured;  // no UVs, no texture
+  CHECK_THROWS_AS(render_mesh(sphere, o), InputError);
+  CHECK_THROWS_AS(render_mesh(textured_quad(), o), InputError);  // UVs but no texture
+  CHECK_THROWS_AS(render_uv_layout(sphere, 64, 64), InputError);
+  CHECK_THROWS_AS(render_mesh(Mesh{}, RenderOptions{}), InputError);
+  Mesh bad = textured_quad();
+  bad.faces[1][2] = 17;
+  CHECK_THROWS_AS(render_mesh(bad, RenderOptions{}), InputError);
+}
+
+TEST_CASE("isocharts render writes the image and reports it", "[render][cli]") {
+  const fs::path dir = fs::temp_directory_path() / ("isocharts_render_test_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string out = (dir / "views.png").string();
+  const std::string cli = ISOCHARTS_CLI;
+  auto run = [&](const std::string& args) {
+    const int status =
+        std::system((cli + " " + args + " > " + (dir / "stdout.txt").string() + " 2>&1").c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  };
+  CHECK(run("render builtin:sphere -o " + out + " --views 2 --width 120 --height 50 --json") == 0);
+  const Image img = read_image(out);
+  CHECK(img.width == 120);
+  CHECK(img.height == 50);
+  // Bad input exits with 2: a missing texture, an unknown built-in, views out of range.
+  CHECK(run("render builtin:sphere -o " + out + " --texture " + (dir / "none.png").string()) == 2);
+  CHECK(run("render builtin:nothing -o " + out) == 2);
+  CHECK(run("render builtin:sphere -o " + out + " --views 9") == 2);
+  CHECK(run("render builtin:sphere --uv-layout -o " + out) == 2);  // no UVs
+  fs::remove_all(dir);
+}
