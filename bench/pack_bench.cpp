@@ -8,9 +8,9 @@
 //     --gutter N      gutter in texels (2)
 //     --rotations N   orientations per chart (16)
 //     --no-holes      disable hole filling
-//     --one-order     pack only in decreasing-area order
+//     --variants N    greedy variants per scale (0 = automatic)
 //     --growth W      growth weight of side insertions (0.5)
-//     --paper         the paper's scheme alone: --no-holes --one-order --growth 0
+//     --paper         the paper's scheme alone: --no-holes --variants 1 --growth 0
 //     --tiny N        pack N random triangles, each its own chart, instead of atlases
 //     --threads N     TBB threads (0 = default)
 //     --dump PREFIX   write each packed atlas to PREFIX<name>.ppm
@@ -206,11 +206,11 @@ int main(int argc, char** argv) {
     else if (a == "--rotations") options.rotations = next();
     else if (a == "--threads") threads = next();
     else if (a == "--no-holes") options.fill_holes = false;
-    else if (a == "--one-order") options.try_orders = false;
+    else if (a == "--variants") options.variants = next();
     else if (a == "--growth" && i + 1 < argc) options.growth_weight = std::atof(argv[++i]);
     else if (a == "--paper") {
       options.fill_holes = false;
-      options.try_orders = false;
+      options.variants = 1;
       options.growth_weight = 0;
     }
     else if (a == "--check") check = true;
@@ -231,8 +231,8 @@ int main(int argc, char** argv) {
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                   threads);
 
-  std::printf("%-22s %6s %9s %9s %8s %9s %8s %s\n", "atlas", "charts", "theirs", "ours",
-              "util", "seconds", "tries", check ? "check" : "");
+  std::printf("%-22s %6s %9s %9s %8s %9s %8s %8s %s\n", "atlas", "charts", "theirs", "ours",
+              "util", "seconds", "scales", "variant", check ? "check" : "");
   try {
     for (const std::string& file : files) {
       ChartSet set = file.rfind("tiny:", 0) == 0 ? random_triangles(tiny) : charts_of(read_obj_with_uvs(file));
@@ -263,8 +263,8 @@ int main(int argc, char** argv) {
       std::string name = file.substr(file.find_last_of('/') + 1);
       if (!dump.empty())
         dump_ppm(set.charts, options.width, options.height, dump + name.substr(0, name.size() - 4) + ".ppm");
-      std::printf("%-22s %6zu %9.3f %9.3f %8.3f %9.2f %8d %s\n", name.c_str(), set.charts.size(),
-                  set.input_ratio, r.packing_ratio, r.utilization, r.seconds, r.attempts,
+      std::printf("%-22s %6zu %9.3f %9.3f %8.3f %9.2f %8d %8d %s\n", name.c_str(), set.charts.size(),
+                  set.input_ratio, r.packing_ratio, r.utilization, r.seconds, r.attempts, r.variant,
                   verdict.c_str());
       std::fflush(stdout);
     }
