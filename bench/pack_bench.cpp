@@ -25,13 +25,13 @@
 #include <cstdlib>
 #include <fstream>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include <tbb/global_control.h>
 
 #include "isochart/error.h"
+#include "isochart/io.h"
 #include "isochart/mesh.h"
 #include "isochart/pack.h"
 #include "isochart/stretch.h"
@@ -39,48 +39,6 @@
 using namespace isochart;
 
 namespace {
-
-// TEMPORARY: a minimal OBJ reader for v/vt/f, until load_mesh reads texture coordinates
-// (the full reader lands on main). Polygons are fan-triangulated; vn and the rest ignored.
-Mesh read_obj_with_uvs(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot open");
-  Mesh m;
-  std::string line;
-  auto index = [](const std::string& s, std::size_t count) {
-    const long v = std::stol(s);
-    return static_cast<int>(v < 0 ? static_cast<long>(count) + v : v - 1);
-  };
-  while (std::getline(in, line)) {
-    std::istringstream ls(line);
-    std::string tag;
-    ls >> tag;
-    if (tag == "v") {
-      Vec3d p;
-      ls >> p.x >> p.y >> p.z;
-      m.positions.push_back(p);
-    } else if (tag == "vt") {
-      Vec2d t;
-      ls >> t.x >> t.y;
-      m.uvs.push_back(t);
-    } else if (tag == "f") {
-      std::vector<int> v, t;
-      std::string corner;
-      while (ls >> corner) {
-        const std::size_t slash = corner.find('/');
-        v.push_back(index(corner.substr(0, slash), m.positions.size()));
-        if (slash == std::string::npos) throw InputError(path, "face without vt");
-        const std::size_t slash2 = corner.find('/', slash + 1);
-        t.push_back(index(corner.substr(slash + 1, slash2 - slash - 1), m.uvs.size()));
-      }
-      for (std::size_t k = 1; k + 1 < v.size(); ++k) {
-        m.faces.push_back({v[0], v[k], v[k + 1]});
-        m.face_uvs.push_back({t[0], t[k], t[k + 1]});
-      }
-    }
-  }
-  return m;
-}
 
 struct ChartSet {
   std::vector<PackChart> charts;
@@ -235,7 +193,7 @@ int main(int argc, char** argv) {
               "util", "seconds", "scales", "variant", check ? "check" : "");
   try {
     for (const std::string& file : files) {
-      ChartSet set = file.rfind("tiny:", 0) == 0 ? random_triangles(tiny) : charts_of(read_obj_with_uvs(file));
+      ChartSet set = file.rfind("tiny:", 0) == 0 ? random_triangles(tiny) : charts_of(load_mesh(file).mesh);
       const PackResult r = pack_charts(set.charts, options);
       std::string verdict;
       if (check) {

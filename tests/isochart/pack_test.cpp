@@ -7,12 +7,11 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <random>
-#include <sstream>
 #include <string>
 
 #include "isochart/error.h"
+#include "isochart/io.h"
 #include "isochart/stretch.h"
 // Internal header: the fast raster is checked against the per-triangle reference.
 #include "../../libisochart/src/pack_raster.h"
@@ -183,40 +182,6 @@ void check_packing(const std::vector<PackChart>& before, const std::vector<PackC
   CHECK(r.packing_ratio <= 1);
 }
 
-// TEMPORARY: reads v/vt/f of an OBJ until load_mesh reads texture coordinates.
-Mesh read_obj_with_uvs(const std::string& path) {
-  std::ifstream in(path);
-  REQUIRE(in);
-  Mesh m;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream ls(line);
-    std::string tag;
-    ls >> tag;
-    if (tag == "v") {
-      Vec3d p;
-      ls >> p.x >> p.y >> p.z;
-      m.positions.push_back(p);
-    } else if (tag == "vt") {
-      Vec2d t;
-      ls >> t.x >> t.y;
-      m.uvs.push_back(t);
-    } else if (tag == "f") {
-      Face v{}, t{};
-      for (int k = 0; k < 3; ++k) {
-        std::string corner;
-        ls >> corner;
-        const std::size_t slash = corner.find('/');
-        v[k] = std::stoi(corner.substr(0, slash)) - 1;
-        t[k] = std::stoi(corner.substr(slash + 1)) - 1;
-      }
-      m.faces.push_back(v);
-      m.face_uvs.push_back(t);
-    }
-  }
-  return m;
-}
-
 // The charts of an atlas with their own UVs (mirrored ones turned back) and 3-D areas.
 std::vector<PackChart> atlas_charts(const Mesh& m) {
   int count = 0;
@@ -384,7 +349,7 @@ TEST_CASE("many tiny charts pack densely and fast", "[pack]") {
 
 TEST_CASE("charts of a real atlas pack tighter than UVAtlas packed them", "[pack]") {
   const std::string path = std::string(ISOCHARTS_SHARED_DATA) + "/baseline_atlases/bunny_uvatlas.obj";
-  const std::vector<PackChart> input = atlas_charts(read_obj_with_uvs(path));
+  const std::vector<PackChart> input = atlas_charts(load_mesh(path).mesh);
   REQUIRE(input.size() == 13);
   std::vector<PackChart> charts = input;
   PackOptions o;
