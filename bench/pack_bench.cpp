@@ -17,18 +17,18 @@
 //     --check         verify no overlaps, [0,1]² and winding after packing (the gutter
 //                     is verified exactly by tests/isochart/pack_test.cpp)
 
+#include <tbb/global_control.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <tbb/global_control.h>
 
 #include "isochart/error.h"
 #include "isochart/io.h"
@@ -73,8 +73,8 @@ ChartSet charts_of(const Mesh& m) {
     c.faces.push_back(face);
     const Vec3d& a = m.positions[m.faces[f][0]];
     c.area_3d += triangle_area(a, m.positions[m.faces[f][1]], m.positions[m.faces[f][2]]);
-    uv_area += std::abs(signed_area(m.uvs[m.face_uvs[f][0]], m.uvs[m.face_uvs[f][1]],
-                                    m.uvs[m.face_uvs[f][2]]));
+    uv_area +=
+        std::abs(signed_area(m.uvs[m.face_uvs[f][0]], m.uvs[m.face_uvs[f][1]], m.uvs[m.face_uvs[f][2]]));
   }
   set.input_ratio = uv_area / ((hi.x - lo.x) * (hi.y - lo.y));
   for (PackChart& c : set.charts) {
@@ -157,27 +157,39 @@ int main(int argc, char** argv) {
       }
       return std::atoi(argv[++i]);
     };
-    if (a == "--size") options.width = options.height = next();
-    else if (a == "--width") options.width = next();
-    else if (a == "--height") options.height = next();
-    else if (a == "--gutter") options.gutter = next();
-    else if (a == "--rotations") options.rotations = next();
-    else if (a == "--threads") threads = next();
-    else if (a == "--no-holes") options.fill_holes = false;
-    else if (a == "--variants") options.variants = next();
-    else if (a == "--growth" && i + 1 < argc) options.growth_weight = std::atof(argv[++i]);
+    if (a == "--size")
+      options.width = options.height = next();
+    else if (a == "--width")
+      options.width = next();
+    else if (a == "--height")
+      options.height = next();
+    else if (a == "--gutter")
+      options.gutter = next();
+    else if (a == "--rotations")
+      options.rotations = next();
+    else if (a == "--threads")
+      threads = next();
+    else if (a == "--no-holes")
+      options.fill_holes = false;
+    else if (a == "--variants")
+      options.variants = next();
+    else if (a == "--growth" && i + 1 < argc)
+      options.growth_weight = std::atof(argv[++i]);
     else if (a == "--paper") {
       options.fill_holes = false;
       options.variants = 1;
       options.growth_weight = 0;
-    }
-    else if (a == "--check") check = true;
-    else if (a == "--tiny") tiny = next();
-    else if (a == "--dump" && i + 1 < argc) dump = argv[++i];
+    } else if (a == "--check")
+      check = true;
+    else if (a == "--tiny")
+      tiny = next();
+    else if (a == "--dump" && i + 1 < argc)
+      dump = argv[++i];
     else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "pack_bench: unknown option %s\n", a.c_str());
       return 2;
-    } else files.push_back(a);
+    } else
+      files.push_back(a);
   }
   if (tiny > 0) files.push_back("tiny:" + std::to_string(tiny));
   if (files.empty())
@@ -186,11 +198,10 @@ int main(int argc, char** argv) {
       files.push_back(std::string(ISOCHARTS_SHARED_DATA) + "/baseline_atlases/" + name + ".obj");
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0)
-    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                  threads);
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
 
-  std::printf("%-22s %6s %9s %9s %8s %9s %8s %8s %s\n", "atlas", "charts", "theirs", "ours",
-              "util", "seconds", "scales", "variant", check ? "check" : "");
+  std::printf("%-22s %6s %9s %9s %8s %9s %8s %8s %s\n", "atlas", "charts", "theirs", "ours", "util",
+              "seconds", "scales", "variant", check ? "check" : "");
   try {
     for (const std::string& file : files) {
       ChartSet set = file.rfind("tiny:", 0) == 0 ? random_triangles(tiny) : charts_of(load_mesh(file).mesh);

@@ -9,6 +9,9 @@
 
 #include "isochart/pack.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -16,9 +19,6 @@
 #include <limits>
 #include <numeric>
 #include <string>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "isochart/error.h"
 #include "pack_canvas.h"
@@ -62,11 +62,13 @@ struct Attempt {
   bool ok = false;
   std::vector<Placed> placed;  // per chart
   Rect box;
-  double ratio = 0;   // chart area / raster bounding box, to compare orders
+  double ratio = 0;            // chart area / raster bounding box, to compare orders
   double placed_fraction = 0;  // of the charts' texels, when the packing failed
 };
 
-std::string chart_name(std::size_t i) { return "chart " + std::to_string(i); }
+std::string chart_name(std::size_t i) {
+  return "chart " + std::to_string(i);
+}
 
 Prepared prepare(const PackChart& c, std::size_t index) {
   if (c.faces.empty()) throw InputError("", chart_name(index) + " has no faces");
@@ -83,8 +85,7 @@ Prepared prepare(const PackChart& c, std::size_t index) {
                                  std::to_string(t[k]) + " but the chart has " + std::to_string(nv));
     area += std::abs(signed_area(c.uv[t[0]], c.uv[t[1]], c.uv[t[2]]));
   }
-  if (!(area > 0) || !std::isfinite(area))
-    throw InputError("", chart_name(index) + " has zero UV area");
+  if (!(area > 0) || !std::isfinite(area)) throw InputError("", chart_name(index) + " has zero UV area");
   if (!std::isfinite(c.area_3d) || c.area_3d < 0)
     throw InputError("", chart_name(index) + ": area_3d is " + std::to_string(c.area_3d) +
                              " (must be a finite value >= 0)");
@@ -129,16 +130,16 @@ std::vector<Vec2d> texel_points(const Prepared& c, int k, int rotations, double 
   return out;
 }
 
-std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int rotations,
-                                       double scale, int limit_w, int limit_h) {
+std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int rotations, double scale,
+                                       int limit_w, int limit_h) {
   std::vector<ChartRaster> out(charts.size() * rotations);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size()),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t j = range.begin(); j != range.end(); ++j) {
                         const Prepared& c = charts[j / rotations];
                         const int k = static_cast<int>(j % rotations);
-                        out[j] = pack_detail::rasterize_chart(texel_points(c, k, rotations, scale),
-                                                              *c.faces, c.outline, limit_w, limit_h);
+                        out[j] = pack_detail::rasterize_chart(texel_points(c, k, rotations, scale), *c.faces,
+                                                              c.outline, limit_w, limit_h);
                       }
                     });
   return out;
@@ -147,9 +148,9 @@ std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int 
 // One packing of all charts at the rasters' scale, in the given order (§6 step 3).
 // `tick(k)` is called every few charts with the number placed so far.
 template <class Tick>
-Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations,
-                  const std::vector<int>& order, int limit_w, int limit_h, int gutter,
-                  double growth_weight, bool fill_holes, double area_texels, const Tick& tick) {
+Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations, const std::vector<int>& order,
+                  int limit_w, int limit_h, int gutter, double growth_weight, bool fill_holes,
+                  double area_texels, const Tick& tick) {
   Canvas canvas(limit_w, limit_h, gutter, growth_weight);
   Attempt attempt;
   attempt.placed.resize(rasters.size() / rotations);
@@ -180,11 +181,9 @@ Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations,
         const Rect& box = canvas.bounds();
         bool sideways = box.h * aspect > box.w;
         for (int pass = 0; pass < 2 && !chosen.valid; ++pass, sideways = !sideways) {
-          const Side sides[2] = {sideways ? Side::Left : Side::Top,
-                                 sideways ? Side::Right : Side::Bottom};
-          tbb::parallel_for(0, 2 * rotations, [&](int j) {
-            candidates[j] = canvas.best_from_side(r[j / 2], sides[j % 2]);
-          });
+          const Side sides[2] = {sideways ? Side::Left : Side::Top, sideways ? Side::Right : Side::Bottom};
+          tbb::parallel_for(0, 2 * rotations,
+                            [&](int j) { candidates[j] = canvas.best_from_side(r[j / 2], sides[j % 2]); });
           for (int j = 0; j < 2 * rotations; ++j) {
             const Candidate& c = candidates[j];
             if (c.valid && (!chosen.valid || c.cost < chosen.cost)) {
@@ -304,8 +303,7 @@ void validate(const PackOptions& o) {
 
 }  // namespace
 
-PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& options,
-                       const Progress& progress) {
+PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& options, const Progress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
   validate(options);
   PackResult result;
@@ -347,9 +345,9 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
   const auto tick = [&](double within) {
     report(progress, Stage::Packing, std::min(0.95, (attempts_done.load() + within) / expected));
   };
-  Search best_search = search_scale(prepared, rotations, orders, base, options, total_area,
-                                    std::sqrt(0.75 * limit_w * limit_h / total_area), false, tick,
-                                    attempts_done);
+  Search best_search =
+      search_scale(prepared, rotations, orders, base, options, total_area,
+                   std::sqrt(0.75 * limit_w * limit_h / total_area), false, tick, attempts_done);
   if (best_search.fits <= 0)
     throw InputError("", "pack: the " + std::to_string(n) + " charts do not fit a " +
                              std::to_string(options.width) + "x" + std::to_string(options.height) +

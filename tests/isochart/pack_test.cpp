@@ -1,10 +1,10 @@
 #include "isochart/pack.h"
 
-#include <catch2/catch.hpp>
 #include <tbb/global_control.h>
 
 #include <algorithm>
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
 #include <random>
@@ -105,8 +105,8 @@ std::vector<long long> touched_texels(const PackChart& c, int w, int h) {
 }
 
 struct GutterCheck {
-  long long violations = 0;  // texel pairs of different charts closer than the gutter
-  long long near_border = 0; // chart texels closer than the gutter to the border
+  long long violations = 0;   // texel pairs of different charts closer than the gutter
+  long long near_border = 0;  // chart texels closer than the gutter to the border
 };
 
 // Conservative rasters of all charts on the W×H grid: no texel of one chart may lie within
@@ -201,8 +201,8 @@ std::vector<PackChart> atlas_charts(const Mesh& m) {
       face[k] = id[t];
     }
     c.faces.push_back(face);
-    c.area_3d += triangle_area(m.positions[m.faces[f][0]], m.positions[m.faces[f][1]],
-                               m.positions[m.faces[f][2]]);
+    c.area_3d +=
+        triangle_area(m.positions[m.faces[f][0]], m.positions[m.faces[f][1]], m.positions[m.faces[f][2]]);
   }
   for (PackChart& c : charts) {
     double s = 0;
@@ -231,7 +231,9 @@ TEST_CASE("packed charts keep the gutter, one density and their winding", "[pack
     for (std::size_t v = 0; v < charts[i].uv.size(); ++v) {
       const Vec2d& q = input[i].uv[v];
       const Vec2d t = Vec2d{std::cos(p.angle) * q.x - std::sin(p.angle) * q.y,
-                            std::sin(p.angle) * q.x + std::cos(p.angle) * q.y} * p.scale + p.offset;
+                            std::sin(p.angle) * q.x + std::cos(p.angle) * q.y} *
+                          p.scale +
+                      p.offset;
       CHECK(t.x / o.width == Approx(charts[i].uv[v].x).margin(1e-9));
       CHECK(t.y / o.height == Approx(charts[i].uv[v].y).margin(1e-9));
     }

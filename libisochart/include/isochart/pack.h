@@ -67,14 +67,14 @@ struct ChartPlacement {
 };
 
 struct PackResult {
-  double packing_ratio = 0;  ///< Σ chart UV area / area of the UV bounding box of all charts
-  double utilization = 0;    ///< Σ chart UV area / area of [0,1]² (texture coverage)
-  double texel_size = 0;     ///< surface length per texel (units of √area_3d), all charts
-  double seconds = 0;        ///< wall time of pack_charts
-  int used_width = 0;        ///< texels spanned by the charts' conservative raster in x
-  int used_height = 0;       ///< same in y
-  int attempts = 0;          ///< scales tried (search and ladder)
-  int variant = 0;           ///< variant kept, in the order PackOptions::variants adds them
+  double packing_ratio = 0;                ///< Σ chart UV area / area of the UV bounding box of all charts
+  double utilization = 0;                  ///< Σ chart UV area / area of [0,1]² (texture coverage)
+  double texel_size = 0;                   ///< surface length per texel (units of √area_3d), all charts
+  double seconds = 0;                      ///< wall time of pack_charts
+  int used_width = 0;                      ///< texels spanned by the charts' conservative raster in x
+  int used_height = 0;                     ///< same in y
+  int attempts = 0;                        ///< scales tried (search and ladder)
+  int variant = 0;                         ///< variant kept, in the order PackOptions::variants adds them
   std::vector<ChartPlacement> placements;  ///< per input chart
 };
 
