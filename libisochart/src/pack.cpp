@@ -230,14 +230,13 @@ struct Search {
 
 // Scale search (texels per surface unit): at each scale tried, every variant packs (in
 // parallel) and the scale fits when one of them does. Grow while packings fit, then bisect
-// between the largest scale that fits and the smallest that does not. With `must_start`, a
-// failure at the starting scale ends the search at once (used to probe above a known fit).
-// `tick(f)` reports progress within an attempt; `attempts_done` counts attempts overall.
+// between the largest scale that fits and the smallest that does not. `tick(f)` reports progress within an
+// attempt; `attempts_done` counts attempts overall.
 template <class Tick>
 Search search_scale(const std::vector<Prepared>& prepared, int rotations,
                     const std::vector<std::vector<int>>& orders, const std::vector<Variant>& variants,
-                    const PackOptions& options, double total_area, double start, bool must_start,
-                    const Tick& tick, std::atomic<int>& attempts_done) {
+                    const PackOptions& options, double total_area, double start, const Tick& tick,
+                    std::atomic<int>& attempts_done) {
   const int g = options.gutter;
   const int limit_w = options.width - 2 * g, limit_h = options.height - 2 * g;
   const double n = static_cast<double>(prepared.size());
@@ -265,7 +264,6 @@ Search search_scale(const std::vector<Prepared>& prepared, int rotations,
       search.best = std::move(tries[ok]);
       search.variant = ok;
     } else {
-      if (must_start && search.attempts == 1) break;
       fails = scale;
     }
     if (search.fits > 0 && fails < std::numeric_limits<double>::infinity()) {
