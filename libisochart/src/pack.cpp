@@ -343,9 +343,8 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
   const auto tick = [&](double within) {
     report(progress, Stage::Packing, std::min(0.95, (attempts_done.load() + within) / expected));
   };
-  Search best_search =
-      search_scale(prepared, rotations, orders, base, options, total_area,
-                   std::sqrt(0.75 * limit_w * limit_h / total_area), false, tick, attempts_done);
+  Search best_search = search_scale(prepared, rotations, orders, base, options, total_area,
+                                    std::sqrt(0.75 * limit_w * limit_h / total_area), tick, attempts_done);
   if (best_search.fits <= 0)
     throw InputError("", "pack: the " + std::to_string(n) + " charts do not fit a " +
                              std::to_string(options.width) + "x" + std::to_string(options.height) +
