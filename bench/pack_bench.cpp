@@ -8,30 +8,30 @@
 //     --gutter N      gutter in texels (2)
 //     --rotations N   orientations per chart (16)
 //     --no-holes      disable hole filling
-//     --one-order     pack only in decreasing-area order
+//     --variants N    greedy variants per scale (0 = automatic)
 //     --growth W      growth weight of side insertions (0.5)
-//     --paper         the paper's scheme alone: --no-holes --one-order --growth 0
+//     --paper         the paper's scheme alone: --no-holes --variants 1 --growth 0
 //     --tiny N        pack N random triangles, each its own chart, instead of atlases
 //     --threads N     TBB threads (0 = default)
 //     --dump PREFIX   write each packed atlas to PREFIX<name>.ppm
 //     --check         verify no overlaps, [0,1]² and winding after packing (the gutter
 //                     is verified exactly by tests/isochart/pack_test.cpp)
 
+#include <tbb/global_control.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <vector>
 
-#include <tbb/global_control.h>
-
 #include "isochart/error.h"
+#include "isochart/io.h"
 #include "isochart/mesh.h"
 #include "isochart/pack.h"
 #include "isochart/stretch.h"
@@ -39,48 +39,6 @@
 using namespace isochart;
 
 namespace {
-
-// TEMPORARY: a minimal OBJ reader for v/vt/f, until load_mesh reads texture coordinates
-// (the full reader lands on main). Polygons are fan-triangulated; vn and the rest ignored.
-Mesh read_obj_with_uvs(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot open");
-  Mesh m;
-  std::string line;
-  auto index = [](const std::string& s, std::size_t count) {
-    const long v = std::stol(s);
-    return static_cast<int>(v < 0 ? static_cast<long>(count) + v : v - 1);
-  };
-  while (std::getline(in, line)) {
-    std::istringstream ls(line);
-    std::string tag;
-    ls >> tag;
-    if (tag == "v") {
-      Vec3d p;
-      ls >> p.x >> p.y >> p.z;
-      m.positions.push_back(p);
-    } else if (tag == "vt") {
-      Vec2d t;
-      ls >> t.x >> t.y;
-      m.uvs.push_back(t);
-    } else if (tag == "f") {
-      std::vector<int> v, t;
-      std::string corner;
-      while (ls >> corner) {
-        const std::size_t slash = corner.find('/');
-        v.push_back(index(corner.substr(0, slash), m.positions.size()));
-        if (slash == std::string::npos) throw InputError(path, "face without vt");
-        const std::size_t slash2 = corner.find('/', slash + 1);
-        t.push_back(index(corner.substr(slash + 1, slash2 - slash - 1), m.uvs.size()));
-      }
-      for (std::size_t k = 1; k + 1 < v.size(); ++k) {
-        m.faces.push_back({v[0], v[k], v[k + 1]});
-        m.face_uvs.push_back({t[0], t[k], t[k + 1]});
-      }
-    }
-  }
-  return m;
-}
 
 struct ChartSet {
   std::vector<PackChart> charts;
@@ -115,8 +73,8 @@ ChartSet charts_of(const Mesh& m) {
     c.faces.push_back(face);
     const Vec3d& a = m.positions[m.faces[f][0]];
     c.area_3d += triangle_area(a, m.positions[m.faces[f][1]], m.positions[m.faces[f][2]]);
-    uv_area += std::abs(signed_area(m.uvs[m.face_uvs[f][0]], m.uvs[m.face_uvs[f][1]],
-                                    m.uvs[m.face_uvs[f][2]]));
+    uv_area +=
+        std::abs(signed_area(m.uvs[m.face_uvs[f][0]], m.uvs[m.face_uvs[f][1]], m.uvs[m.face_uvs[f][2]]));
   }
   set.input_ratio = uv_area / ((hi.x - lo.x) * (hi.y - lo.y));
   for (PackChart& c : set.charts) {
@@ -199,27 +157,39 @@ int main(int argc, char** argv) {
       }
       return std::atoi(argv[++i]);
     };
-    if (a == "--size") options.width = options.height = next();
-    else if (a == "--width") options.width = next();
-    else if (a == "--height") options.height = next();
-    else if (a == "--gutter") options.gutter = next();
-    else if (a == "--rotations") options.rotations = next();
-    else if (a == "--threads") threads = next();
-    else if (a == "--no-holes") options.fill_holes = false;
-    else if (a == "--one-order") options.try_orders = false;
-    else if (a == "--growth" && i + 1 < argc) options.growth_weight = std::atof(argv[++i]);
+    if (a == "--size")
+      options.width = options.height = next();
+    else if (a == "--width")
+      options.width = next();
+    else if (a == "--height")
+      options.height = next();
+    else if (a == "--gutter")
+      options.gutter = next();
+    else if (a == "--rotations")
+      options.rotations = next();
+    else if (a == "--threads")
+      threads = next();
+    else if (a == "--no-holes")
+      options.fill_holes = false;
+    else if (a == "--variants")
+      options.variants = next();
+    else if (a == "--growth" && i + 1 < argc)
+      options.growth_weight = std::atof(argv[++i]);
     else if (a == "--paper") {
       options.fill_holes = false;
-      options.try_orders = false;
+      options.variants = 1;
       options.growth_weight = 0;
-    }
-    else if (a == "--check") check = true;
-    else if (a == "--tiny") tiny = next();
-    else if (a == "--dump" && i + 1 < argc) dump = argv[++i];
+    } else if (a == "--check")
+      check = true;
+    else if (a == "--tiny")
+      tiny = next();
+    else if (a == "--dump" && i + 1 < argc)
+      dump = argv[++i];
     else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "pack_bench: unknown option %s\n", a.c_str());
       return 2;
-    } else files.push_back(a);
+    } else
+      files.push_back(a);
   }
   if (tiny > 0) files.push_back("tiny:" + std::to_string(tiny));
   if (files.empty())
@@ -228,14 +198,13 @@ int main(int argc, char** argv) {
       files.push_back(std::string(ISOCHARTS_SHARED_DATA) + "/baseline_atlases/" + name + ".obj");
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0)
-    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                  threads);
+    limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
 
-  std::printf("%-22s %6s %9s %9s %8s %9s %8s %s\n", "atlas", "charts", "theirs", "ours",
-              "util", "seconds", "tries", check ? "check" : "");
+  std::printf("%-22s %6s %9s %9s %8s %9s %8s %8s %s\n", "atlas", "charts", "theirs", "ours", "util",
+              "seconds", "scales", "variant", check ? "check" : "");
   try {
     for (const std::string& file : files) {
-      ChartSet set = file.rfind("tiny:", 0) == 0 ? random_triangles(tiny) : charts_of(read_obj_with_uvs(file));
+      ChartSet set = file.rfind("tiny:", 0) == 0 ? random_triangles(tiny) : charts_of(load_mesh(file).mesh);
       const PackResult r = pack_charts(set.charts, options);
       std::string verdict;
       if (check) {
@@ -263,8 +232,8 @@ int main(int argc, char** argv) {
       std::string name = file.substr(file.find_last_of('/') + 1);
       if (!dump.empty())
         dump_ppm(set.charts, options.width, options.height, dump + name.substr(0, name.size() - 4) + ".ppm");
-      std::printf("%-22s %6zu %9.3f %9.3f %8.3f %9.2f %8d %s\n", name.c_str(), set.charts.size(),
-                  set.input_ratio, r.packing_ratio, r.utilization, r.seconds, r.attempts,
+      std::printf("%-22s %6zu %9.3f %9.3f %8.3f %9.2f %8d %8d %s\n", name.c_str(), set.charts.size(),
+                  set.input_ratio, r.packing_ratio, r.utilization, r.seconds, r.attempts, r.variant,
                   verdict.c_str());
       std::fflush(stdout);
     }

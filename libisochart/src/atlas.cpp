@@ -396,6 +396,7 @@ class Builder {
     }
     detail::ParamOptions po = param_;
     po.seed = chart_seed(faces);
+    po.lscm_on_any_failure = true;
     try_accept(g, topo, start_uncut, po, out);
     return out;
   }
@@ -418,13 +419,28 @@ class Builder {
       if (tube && flipped_fraction(cg, start) > 0.25)
         start = detail::isomap_uv(embed(cg, out.times, landmarks_for(cg, g.faces)));
     }
+    auto accept = [&out](detail::ChartGeometry& geometry, detail::ChartParam& param) {
+      out.accepted = true;
+      out.chart.geometry = std::move(geometry);
+      out.chart.param = std::move(param);
+      return true;
+    };
     detail::ChartParam p = detail::parameterize(cg, start, po);
     out.times.optimization += p.optimize_seconds;
-    if (!p.accepted) return false;
-    out.accepted = true;
-    out.chart.geometry = std::move(cg);
-    out.chart.param = std::move(p);
-    return true;
+    if (p.accepted) return accept(cg, p);
+    // A sock (a tube closed at one end, like a leg) folds onto itself in any flat start.
+    // Slit lengthwise it unrolls: one chart instead of the two or three splitting would take.
+    // Either its shape says so, or the start folded over a quarter of it.
+    if (topo.boundary_loops().size() != 1) return false;
+    const std::vector<double> dist = detail::boundary_distance(g, topo);
+    const bool folded = !start.empty() && flipped_fraction(cg, start) > 0.25;
+    if (!folded && !detail::is_sock(g, topo, dist)) return false;
+    detail::ChartGeometry sg = g;
+    if (!detail::cut_seam(sg, topo, &dist)) return false;
+    const Embedding se = embed(sg, out.times, landmarks_for(sg, g.faces));
+    detail::ChartParam q = detail::parameterize(sg, detail::isomap_uv(se), po);
+    out.times.optimization += q.optimize_seconds;
+    return q.accepted && accept(sg, q);
   }
 
   Atlas assemble(const std::vector<DoneChart>& charts) const {

@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "isochart/embedding.h"
+#include "isochart/geodesic.h"
 #include "isochart/optimize.h"
 #include "isochart/stretch.h"
 
@@ -158,6 +159,49 @@ bool cut_to_disk(ChartGeometry& g, std::vector<int>* origin, const Topology* giv
     }
   }
   cut_along_edges(g, cut, origin, &topo);
+  const Topology after(g.tris, g.num_vertices());
+  return after.boundary_loops().size() == 1 && after.num_components() == 1;
+}
+
+std::vector<double> boundary_distance(const ChartGeometry& g, const Topology& topo) {
+  std::vector<int> sources;
+  for (const auto& loop : topo.boundary_loops()) sources.insert(sources.end(), loop.begin(), loop.end());
+  std::vector<double> dist;
+  GeodesicSolver(g.positions, g.tris).distances(sources, dist);
+  return dist;
+}
+
+bool is_sock(const ChartGeometry& g, const Topology& topo, const std::vector<double>& dist) {
+  if (topo.boundary_loops().size() != 1) return false;
+  const auto& loop = topo.boundary_loops()[0];
+  double length = 0, far = 0;
+  for (size_t i = 0; i < loop.size(); ++i) length += norm(g.positions[loop[i]] - g.positions[loop[(i + 1) % loop.size()]]);
+  for (double d : dist)
+    if (std::isfinite(d)) far = std::max(far, d);
+  return length > 0 && far > 0.4 * length;
+}
+
+bool cut_seam(ChartGeometry& g, const Topology& topo, const std::vector<double>* given) {
+  if (topo.boundary_loops().size() != 1 || topo.genus() != 0 || topo.num_components() != 1) return false;
+  const std::vector<double> own = given ? std::vector<double>() : boundary_distance(g, topo);
+  const std::vector<double>& dist = given ? *given : own;
+  int tip = -1;
+  for (int v = 0; v < g.num_vertices(); ++v)
+    if (std::isfinite(dist[v]) && (tip < 0 || dist[v] > dist[tip])) tip = v;
+  if (tip < 0 || !(dist[tip] > 0)) return false;
+  std::vector<char> cut(topo.num_edges(), 0);
+  int steps = 0;
+  for (int v = tip; !topo.is_boundary_vertex(v); ++steps) {
+    int next = -1;
+    for (int w : topo.vertex_neighbors(v))
+      if (next < 0 || dist[w] < dist[next]) next = w;
+    // The field decreases towards the boundary from every interior vertex; guard anyway.
+    if (next < 0 || !(dist[next] < dist[v]) || steps > g.num_vertices()) return false;
+    cut[topo.find_edge(v, next)] = 1;
+    v = next;
+  }
+  if (steps == 0) return false;
+  cut_along_edges(g, cut, nullptr, &topo);
   const Topology after(g.tris, g.num_vertices());
   return after.boundary_loops().size() == 1 && after.num_components() == 1;
 }
@@ -392,8 +436,8 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
     // LSCM rescues charts IsoMap folds or overlaps, and near misses; a chart IsoMap folds
     // in large part, or that misses the bound by far, needs splitting.
     const bool near_miss = best.flipped == 0 && std::isfinite(best.l2) && best.l2 <= kNearMissL2 * o.max_l2;
-    try_lscm = try_lscm && best.initial_flip_fraction <= kMaxUntangleFraction &&
-               (best.flipped > 0 || best.overlaps || near_miss);
+    try_lscm = try_lscm && (o.lscm_on_any_failure || (best.initial_flip_fraction <= kMaxUntangleFraction &&
+                                                      (best.flipped > 0 || best.overlaps || near_miss)));
   }
   std::vector<Vec2d> uv;
   if (try_lscm && lscm(g, uv)) {

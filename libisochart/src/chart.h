@@ -32,6 +32,20 @@ ChartGeometry make_chart(const Mesh& mesh, const std::vector<int>& faces);
 /// `topo` may pass g's current topology to save rebuilding it.
 bool cut_to_disk(ChartGeometry& g, std::vector<int>* origin = nullptr, const Topology* topo = nullptr);
 
+/// Cuts a seam into a disk chart from the vertex farthest (geodesically) from its boundary
+/// straight back to the boundary, down the distance field's steepest descent. A sock-shaped
+/// chart (a tube closed at one end, like a leg) then unrolls flat instead of folding onto
+/// itself. Returns false when g is not a disk or no seam was cut.
+/// `boundary_distance` (#V, geodesic distance to the boundary) may be given to save a run.
+bool cut_seam(ChartGeometry& g, const Topology& topo, const std::vector<double>* boundary_distance = nullptr);
+
+/// Geodesic distance from every vertex to the boundary of g.
+std::vector<double> boundary_distance(const ChartGeometry& g, const Topology& topo);
+
+/// A disk chart shaped like a sock (a tube closed at one end): its farthest point from the
+/// boundary is more than 0.4 boundary lengths away (a flat disk: 0.16, a hemisphere: 0.25).
+bool is_sock(const ChartGeometry& g, const Topology& topo, const std::vector<double>& boundary_distance);
+
 /// Opens zero-width slits in a start parameterization of a cut chart: every vertex sharing its
 /// origin with another moves slightly into its own triangles, so the boundary starts simple.
 void open_slits(const ChartGeometry& g, const std::vector<int>& origin, std::vector<Vec2d>& uv);
@@ -51,6 +65,9 @@ struct ParamOptions {
   std::uint64_t seed = 1;
   /// Try an LSCM start when the given start fails by folding, overlap or a narrow miss.
   bool lscm_fallback = true;
+  /// ... or whenever the given start fails: for starts that say nothing about the chart's
+  /// shape (two merged parameterizations aligned by a similarity), unlike an IsoMap start.
+  bool lscm_on_any_failure = false;
 };
 
 struct ChartParam {

@@ -512,6 +512,19 @@ OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::
     r.gave_up = run.gave_up;
   }
   r.after = measure_stretch(positions, faces, uv);
+  if (!r.gave_up && r.after.flipped == 0 && r.after.linf > options.max_linf && options.linf_repair_passes > 0) {
+    OptimizeOptions repair = options;
+    repair.passes = options.linf_repair_passes;
+    repair.linf_weight = 10 * options.linf_weight;
+    repair.vertex_l2_threshold = std::numeric_limits<double>::infinity();  // Linf violators only
+    repair.give_up_l2 = 0;
+    repair.seed = options.seed + 1;
+    Optimizer fix(positions, faces, uv, repair);
+    const OptimizeResult run = fix.run();
+    r.moves += run.moves;
+    r.sweeps += run.sweeps;
+    r.after = measure_stretch(positions, faces, uv);
+  }
   return r;
 }
 

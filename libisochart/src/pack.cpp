@@ -9,16 +9,16 @@
 
 #include "isochart/pack.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <string>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_invoke.h>
 
 #include "isochart/error.h"
 #include "pack_canvas.h"
@@ -36,6 +36,9 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 // The scale search gives up (the charts cannot fit at any scale) after this many attempts.
 constexpr int kMaxAttempts = 60;
+// The ladder of scales tried above the base search's result with all variants: rungs of 1%.
+constexpr int kLadderRungs = 5;
+constexpr double kLadderStep = 0.01;
 
 // A chart in the packer's own frame: centred, scaled so its UV area equals its 3-D area.
 struct Prepared {
@@ -59,11 +62,13 @@ struct Attempt {
   bool ok = false;
   std::vector<Placed> placed;  // per chart
   Rect box;
-  double ratio = 0;   // chart area / raster bounding box, to compare orders
+  double ratio = 0;            // chart area / raster bounding box, to compare orders
   double placed_fraction = 0;  // of the charts' texels, when the packing failed
 };
 
-std::string chart_name(std::size_t i) { return "chart " + std::to_string(i); }
+std::string chart_name(std::size_t i) {
+  return "chart " + std::to_string(i);
+}
 
 Prepared prepare(const PackChart& c, std::size_t index) {
   if (c.faces.empty()) throw InputError("", chart_name(index) + " has no faces");
@@ -80,8 +85,7 @@ Prepared prepare(const PackChart& c, std::size_t index) {
                                  std::to_string(t[k]) + " but the chart has " + std::to_string(nv));
     area += std::abs(signed_area(c.uv[t[0]], c.uv[t[1]], c.uv[t[2]]));
   }
-  if (!(area > 0) || !std::isfinite(area))
-    throw InputError("", chart_name(index) + " has zero UV area");
+  if (!(area > 0) || !std::isfinite(area)) throw InputError("", chart_name(index) + " has zero UV area");
   if (!std::isfinite(c.area_3d) || c.area_3d < 0)
     throw InputError("", chart_name(index) + ": area_3d is " + std::to_string(c.area_3d) +
                              " (must be a finite value >= 0)");
@@ -126,16 +130,16 @@ std::vector<Vec2d> texel_points(const Prepared& c, int k, int rotations, double 
   return out;
 }
 
-std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int rotations,
-                                       double scale, int limit_w, int limit_h) {
+std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int rotations, double scale,
+                                       int limit_w, int limit_h) {
   std::vector<ChartRaster> out(charts.size() * rotations);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size()),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       for (std::size_t j = range.begin(); j != range.end(); ++j) {
                         const Prepared& c = charts[j / rotations];
                         const int k = static_cast<int>(j % rotations);
-                        out[j] = pack_detail::rasterize_chart(texel_points(c, k, rotations, scale),
-                                                              *c.faces, c.outline, limit_w, limit_h);
+                        out[j] = pack_detail::rasterize_chart(texel_points(c, k, rotations, scale), *c.faces,
+                                                              c.outline, limit_w, limit_h);
                       }
                     });
   return out;
@@ -144,10 +148,10 @@ std::vector<ChartRaster> rasterize_all(const std::vector<Prepared>& charts, int 
 // One packing of all charts at the rasters' scale, in the given order (§6 step 3).
 // `tick(k)` is called every few charts with the number placed so far.
 template <class Tick>
-Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations,
-                  const std::vector<int>& order, int limit_w, int limit_h, int gutter,
-                  const PackOptions& options, double area_texels, const Tick& tick) {
-  Canvas canvas(limit_w, limit_h, gutter, options.growth_weight);
+Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations, const std::vector<int>& order,
+                  int limit_w, int limit_h, int gutter, double growth_weight, bool fill_holes,
+                  double area_texels, const Tick& tick) {
+  Canvas canvas(limit_w, limit_h, gutter, growth_weight);
   Attempt attempt;
   attempt.placed.resize(rasters.size() / rotations);
   const double aspect = static_cast<double>(limit_w) / limit_h;
@@ -170,18 +174,16 @@ Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations,
         }
       }
     } else {
-      if (options.fill_holes) chosen = canvas.best_inside(r, rotations);
+      if (fill_holes) chosen = canvas.best_inside(r, rotations);
       if (!chosen.valid) {
         // §6: W_expect = H_curr·W/H; grow sideways when the packing is narrower than that.
         // Lowest cost wins; ties go to the lowest rotation, then the first side of the pair.
         const Rect& box = canvas.bounds();
         bool sideways = box.h * aspect > box.w;
         for (int pass = 0; pass < 2 && !chosen.valid; ++pass, sideways = !sideways) {
-          const Side sides[2] = {sideways ? Side::Left : Side::Top,
-                                 sideways ? Side::Right : Side::Bottom};
-          tbb::parallel_for(0, 2 * rotations, [&](int j) {
-            candidates[j] = canvas.best_from_side(r[j / 2], sides[j % 2]);
-          });
+          const Side sides[2] = {sideways ? Side::Left : Side::Top, sideways ? Side::Right : Side::Bottom};
+          tbb::parallel_for(0, 2 * rotations,
+                            [&](int j) { candidates[j] = canvas.best_from_side(r[j / 2], sides[j % 2]); });
           for (int j = 0; j < 2 * rotations; ++j) {
             const Candidate& c = candidates[j];
             if (c.valid && (!chosen.valid || c.cost < chosen.cost)) {
@@ -212,6 +214,73 @@ Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations,
   return attempt;
 }
 
+// A way to run the greedy packing: the order of the charts and the weight of growth.
+struct Variant {
+  int order = 0;
+  double growth = 0;
+};
+
+// The outcome of one scale search: the largest scale found to fit and its packing.
+struct Search {
+  double fits = 0;
+  Attempt best;
+  int variant = 0;  // index into the variants searched
+  int attempts = 0;
+};
+
+// Scale search (texels per surface unit): at each scale tried, every variant packs (in
+// parallel) and the scale fits when one of them does. Grow while packings fit, then bisect
+// between the largest scale that fits and the smallest that does not. `tick(f)` reports progress within an
+// attempt; `attempts_done` counts attempts overall.
+template <class Tick>
+Search search_scale(const std::vector<Prepared>& prepared, int rotations,
+                    const std::vector<std::vector<int>>& orders, const std::vector<Variant>& variants,
+                    const PackOptions& options, double total_area, double start, const Tick& tick,
+                    std::atomic<int>& attempts_done) {
+  const int g = options.gutter;
+  const int limit_w = options.width - 2 * g, limit_h = options.height - 2 * g;
+  const double n = static_cast<double>(prepared.size());
+  Search search;
+  double scale = start, fails = std::numeric_limits<double>::infinity();
+  while (search.attempts < kMaxAttempts) {
+    tick(0);
+    ++search.attempts;
+    const std::vector<ChartRaster> rasters = rasterize_all(prepared, rotations, scale, limit_w, limit_h);
+    std::vector<Attempt> tries(variants.size());
+    tbb::parallel_for(0, static_cast<int>(variants.size()), [&](int v) {
+      tries[v] = pack_once(rasters, rotations, orders[variants[v].order], limit_w, limit_h, g,
+                           variants[v].growth, options.fill_holes, total_area * scale * scale,
+                           [&](std::size_t done) { tick(done / n); });
+    });
+    ++attempts_done;
+    int ok = -1;
+    double placed = 0;
+    for (int v = 0; v < static_cast<int>(tries.size()); ++v) {
+      if (tries[v].ok && (ok < 0 || tries[v].ratio > tries[ok].ratio)) ok = v;
+      placed = std::max(placed, tries[v].placed_fraction);
+    }
+    if (ok >= 0) {
+      search.fits = scale;
+      search.best = std::move(tries[ok]);
+      search.variant = ok;
+    } else {
+      fails = scale;
+    }
+    if (search.fits > 0 && fails < std::numeric_limits<double>::infinity()) {
+      if (fails / search.fits <= 1 + options.scale_tolerance) break;
+      scale = std::sqrt(search.fits * fails);
+    } else if (search.fits > 0) {
+      const double room = std::min(static_cast<double>(limit_w) / search.best.box.w,
+                                   static_cast<double>(limit_h) / search.best.box.h);
+      scale *= std::max(room, 1 + 4 * options.scale_tolerance);
+    } else {
+      // Nothing fitted yet: shrink by what did not fit (area goes with the square of scale).
+      scale *= std::sqrt(std::clamp(placed, 0.5, 0.98));
+    }
+  }
+  return search;
+}
+
 void validate(const PackOptions& o) {
   auto bad = [](const std::string& m) { throw InputError("", m); };
   if (o.width < 1 || o.width > 8192 || o.height < 1 || o.height > 8192)
@@ -225,14 +294,14 @@ void validate(const PackOptions& o) {
     bad("pack: rotations " + std::to_string(o.rotations) + " is outside 1..360");
   if (!(o.growth_weight >= 0) || !std::isfinite(o.growth_weight))
     bad("pack: growth_weight " + std::to_string(o.growth_weight) + " must be finite and >= 0");
+  if (o.variants < 0) bad("pack: variants " + std::to_string(o.variants) + " is negative");
   if (!(o.scale_tolerance > 0 && o.scale_tolerance < 1))
     bad("pack: scale_tolerance " + std::to_string(o.scale_tolerance) + " is outside (0, 1)");
 }
 
 }  // namespace
 
-PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& options,
-                       const Progress& progress) {
+PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& options, const Progress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
   validate(options);
   PackResult result;
@@ -248,63 +317,63 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
   for (const Prepared& p : prepared) total_area += p.area;
 
   // §6 step 2: decreasing area; the second order sorts by the longer rectangle side.
-  std::vector<std::vector<int>> orders(options.try_orders ? 2 : 1, std::vector<int>(n));
+  std::vector<std::vector<int>> orders(2, std::vector<int>(n));
   for (auto& o : orders) std::iota(o.begin(), o.end(), 0);
   std::stable_sort(orders[0].begin(), orders[0].end(),
                    [&](int a, int b) { return prepared[a].area > prepared[b].area; });
-  if (options.try_orders)
-    std::stable_sort(orders[1].begin(), orders[1].end(),
-                     [&](int a, int b) { return prepared[a].length > prepared[b].length; });
+  std::stable_sort(orders[1].begin(), orders[1].end(),
+                   [&](int a, int b) { return prepared[a].length > prepared[b].length; });
+  // The base search packs both orders with the growth weight at every scale. The greedy
+  // packing is chaotic: a small change of order, weight or scale moves whole charts, and
+  // whether it fits is not monotone in the scale. So, on few charts, where it is cheap, a
+  // ladder of scales above the base's best fit is tried with all variants (both orders with
+  // growth weights `growth_weight`, 0 and 2), and the largest scale that fits is kept.
+  const bool small = n <= 32 && static_cast<long long>(options.width) * options.height <= 4096LL * 4096;
+  const int count = options.variants > 0 ? std::min(options.variants, 6) : (small ? 6 : 2);
+  std::vector<Variant> variants{{0, options.growth_weight}};
+  if (count >= 2) variants.push_back({1, options.growth_weight});
+  const std::vector<Variant> base = variants;
+  for (const double w : {0.0, 2.0})
+    for (int o = 0; o < 2; ++o)
+      if (w != options.growth_weight && static_cast<int>(variants.size()) < count) variants.push_back({o, w});
+  const int rungs = variants.size() > base.size() ? kLadderRungs : 0;
 
-  // Scale search (texels per surface unit): grow while packings fit, then bisect between the
-  // largest scale that fits and the smallest that does not.
-  double scale = std::sqrt(0.75 * limit_w * limit_h / total_area);
-  double fits = 0, fails = std::numeric_limits<double>::infinity();
-  Attempt best;
-  int best_order = 0;
-  int attempts = 0;
-  while (true) {
-    if (attempts == kMaxAttempts)
-      throw InputError("", "pack: the " + std::to_string(n) + " charts do not fit a " +
-                               std::to_string(options.width) + "x" + std::to_string(options.height) +
-                               " texture with a gutter of " + std::to_string(g) + " texels");
-    report(progress, Stage::Packing, std::min(0.95, attempts / 10.0));
+  std::atomic<int> attempts_done{0};
+  const double expected = 10.0 + rungs;  // attempts, roughly
+  const auto tick = [&](double within) {
+    report(progress, Stage::Packing, std::min(0.95, (attempts_done.load() + within) / expected));
+  };
+  Search best_search = search_scale(prepared, rotations, orders, base, options, total_area,
+                                    std::sqrt(0.75 * limit_w * limit_h / total_area), tick, attempts_done);
+  if (best_search.fits <= 0)
+    throw InputError("", "pack: the " + std::to_string(n) + " charts do not fit a " +
+                             std::to_string(options.width) + "x" + std::to_string(options.height) +
+                             " texture with a gutter of " + std::to_string(g) + " texels");
+  int attempts = best_search.attempts;
+  const double base_fits = best_search.fits;
+  for (int k = 0; k <= rungs && rungs > 0; ++k) {
+    // Rung 0 is the base scale, where only the new variants can improve (a tighter box).
+    const double scale = base_fits * (1 + k * kLadderStep);
+    const std::vector<Variant> tried(variants.begin() + (k == 0 ? base.size() : 0), variants.end());
+    tick(0);
     ++attempts;
     const std::vector<ChartRaster> rasters = rasterize_all(prepared, rotations, scale, limit_w, limit_h);
-    const double area_texels = total_area * scale * scale;
-    std::vector<Attempt> tries(orders.size());
-    // Progress: about ten attempts are typical; within one, the share of charts placed.
-    const auto tick = [&](std::size_t done) {
-      report(progress, Stage::Packing, std::min(0.95, (attempts - 1 + static_cast<double>(done) / n) / 10));
-    };
-    tbb::parallel_for(0, static_cast<int>(orders.size()), [&](int o) {
-      tries[o] = pack_once(rasters, rotations, orders[o], limit_w, limit_h, g, options, area_texels, tick);
+    std::vector<Attempt> tries(tried.size());
+    tbb::parallel_for(0, static_cast<int>(tried.size()), [&](int v) {
+      tries[v] = pack_once(rasters, rotations, orders[tried[v].order], limit_w, limit_h, g, tried[v].growth,
+                           options.fill_holes, total_area * scale * scale, [](std::size_t) {});
     });
-    int ok = -1;
-    double placed = 0;
-    for (int o = 0; o < static_cast<int>(tries.size()); ++o) {
-      if (tries[o].ok && (ok < 0 || tries[o].ratio > tries[ok].ratio)) ok = o;
-      placed = std::max(placed, tries[o].placed_fraction);
-    }
-    if (ok >= 0) {
-      fits = scale;
-      best = std::move(tries[ok]);
-      best_order = ok;
-    } else {
-      fails = scale;
-    }
-    if (fits > 0 && fails < std::numeric_limits<double>::infinity()) {
-      if (fails / fits <= 1 + options.scale_tolerance) break;
-      scale = std::sqrt(fits * fails);
-    } else if (fits > 0) {
-      const double room = std::min(static_cast<double>(limit_w) / best.box.w,
-                                   static_cast<double>(limit_h) / best.box.h);
-      scale *= std::max(room, 1 + 4 * options.scale_tolerance);
-    } else {
-      // Nothing fitted yet: shrink by what did not fit (area goes with the square of scale).
-      scale *= std::sqrt(std::clamp(placed, 0.5, 0.98));
-    }
+    ++attempts_done;
+    for (int v = 0; v < static_cast<int>(tries.size()); ++v)
+      if (tries[v].ok && (scale > best_search.fits || tries[v].ratio > best_search.best.ratio)) {
+        best_search.fits = scale;
+        best_search.best = std::move(tries[v]);
+        best_search.variant = v + (k == 0 ? static_cast<int>(base.size()) : 0);
+      }
   }
+  const int best_variant = best_search.variant;
+  const Attempt& best = best_search.best;
+  const double fits = best_search.fits;
 
   // Centre the packing in the texture; the gutter to the border is then at least g.
   const Rect& box = best.box;
@@ -340,7 +409,7 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
   result.used_width = box.w;
   result.used_height = box.h;
   result.attempts = attempts;
-  result.by_length = best_order == 1;
+  result.variant = best_variant;
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   report(progress, Stage::Packing, 1);
   return result;

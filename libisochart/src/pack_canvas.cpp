@@ -1,12 +1,12 @@
 #include "pack_canvas.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <limits>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
 
 namespace isochart::pack_detail {
 
@@ -17,8 +17,9 @@ namespace {
 inline unsigned bytes_at_least(const unsigned char* bytes, int w) {
   std::uint64_t v;
   std::memcpy(&v, bytes, sizeof v);
-  const std::uint64_t high = ((v | 0x8080808080808080ULL) - 0x0101010101010101ULL * static_cast<unsigned>(w)) &
-                             0x8080808080808080ULL;
+  const std::uint64_t high =
+      ((v | 0x8080808080808080ULL) - 0x0101010101010101ULL * static_cast<unsigned>(w)) &
+      0x8080808080808080ULL;
   return static_cast<unsigned>(((high >> 7) * 0x0102040810204080ULL) >> 56);
 }
 
@@ -55,8 +56,8 @@ Canvas::Canvas(int limit_w, int limit_h, int gutter, double growth_weight)
   block_square_.assign(static_cast<std::size_t>(blocks_x_) * blocks_y_, 0);
   for (int by = 0; by < blocks_y_; ++by)
     for (int bx = 0; bx < blocks_x_; ++bx)
-      block_square_[static_cast<std::size_t>(by) * blocks_x_ + bx] = static_cast<unsigned char>(
-          std::min({kSquareCap, width_ - bx * kBlock, height_ - by * kBlock}));
+      block_square_[static_cast<std::size_t>(by) * blocks_x_ + bx] =
+          static_cast<unsigned char>(std::min({kSquareCap, width_ - bx * kBlock, height_ - by * kBlock}));
   supers_x_ = (blocks_x_ + kSuper - 1) / kSuper;
   supers_y_ = (blocks_y_ + kSuper - 1) / kSuper;
   super_square_.assign(static_cast<std::size_t>(supers_x_) * supers_y_, kSquareCap);
@@ -74,7 +75,9 @@ void Canvas::update_free_squares(int x0, int y0, int x1, int y1) {
   };
   for (int y = y1 - 1; y >= y0; --y)
     for (int x = x1 - 1; x >= x0; --x) {
-      const int v = is_set(x, y) ? 0 : std::min(kSquareCap, 1 + std::min({at(x, y + 1), at(x + 1, y), at(x + 1, y + 1)}));
+      const int v = is_set(x, y)
+                        ? 0
+                        : std::min(kSquareCap, 1 + std::min({at(x, y + 1), at(x + 1, y), at(x + 1, y + 1)}));
       square_[static_cast<std::size_t>(y) * width_ + x] = static_cast<unsigned char>(v);
     }
   for (int by = y0 / kBlock; by <= (y1 - 1) / kBlock; ++by)

@@ -102,8 +102,8 @@ Rect largest_rectangle(const ChartRaster& r) {
 
 // Sizes the raster around the points; allocates it and returns the points in raster
 // coordinates unless it exceeds max_w × max_h.
-std::vector<Vec2d> start_raster(const std::vector<Vec2d>& points, ChartRaster& r,
-                                int max_w = 1 << 30, int max_h = 1 << 30) {
+std::vector<Vec2d> start_raster(const std::vector<Vec2d>& points, ChartRaster& r, int max_w = 1 << 30,
+                                int max_h = 1 << 30) {
   double minx = std::numeric_limits<double>::infinity(), miny = minx, maxx = -minx, maxy = -minx;
   for (const Vec2d& p : points) {
     minx = std::min(minx, p.x);
@@ -160,17 +160,21 @@ void finish_raster(ChartRaster& r) {
     const int cw = r.w / cell, ch = r.h / cell;
     const Word full = (Word{1} << cell) - 1;
     std::vector<unsigned char> square(static_cast<std::size_t>(cw + 1) * (ch + 1), 0);
-    auto at = [&](int c, int row) -> unsigned char& { return square[static_cast<std::size_t>(row) * (cw + 1) + c]; };
+    auto at = [&](int c, int row) -> unsigned char& {
+      return square[static_cast<std::size_t>(row) * (cw + 1) + c];
+    };
     std::array<Rect, kGrid * kGrid> best{};
     std::vector<Word> all(r.words);
     for (int row = ch - 1; row >= 0; --row) {
       std::fill(all.begin(), all.end(), ~Word{0});
       for (int d = 0; d < cell; ++d)
-        for (int k = 0; k < r.words; ++k) all[k] &= r.bits[static_cast<std::size_t>(row * cell + d) * r.words + k];
+        for (int k = 0; k < r.words; ++k)
+          all[k] &= r.bits[static_cast<std::size_t>(row * cell + d) * r.words + k];
       for (int c = cw - 1; c >= 0; --c) {
         const int bit = c * cell;
         const bool set = ((all[bit / kWordBits] >> (bit % kWordBits)) & full) == full;
-        const int v = set ? std::min(kCap, 1 + std::min({at(c, row + 1), at(c + 1, row), at(c + 1, row + 1)})) : 0;
+        const int v =
+            set ? std::min(kCap, 1 + std::min({at(c, row + 1), at(c + 1, row), at(c + 1, row + 1)})) : 0;
         at(c, row) = static_cast<unsigned char>(v);
         Rect& b = best[(row * kGrid / ch) * kGrid + c * kGrid / cw];
         if (v >= b.w) b = {c, row, v, v};
@@ -193,9 +197,9 @@ void finish_raster(ChartRaster& r) {
       const Word v = m[k];
       if (!v) continue;
       const Word next_hi = k + 1 < r.words ? m[k + 1] << (kWordBits - 1) : 0;  // bit c+1 → c
-      const Word prev_lo = k > 0 ? m[k - 1] >> (kWordBits - 1) : 0;           // bit c−1 → c
-      const Word e[4] = {v & ~(above ? above[k] : 0), v & ~(below ? below[k] : 0),
-                         v & ~((v >> 1) | next_hi), v & ~((v << 1) | prev_lo)};
+      const Word prev_lo = k > 0 ? m[k - 1] >> (kWordBits - 1) : 0;            // bit c−1 → c
+      const Word e[4] = {v & ~(above ? above[k] : 0), v & ~(below ? below[k] : 0), v & ~((v >> 1) | next_hi),
+                         v & ~((v << 1) | prev_lo)};
       for (int d = 0; d < 4; ++d)
         if (e[d]) r.edge[d].push_back({row, k, e[d]});
     }
@@ -219,8 +223,7 @@ void finish_raster(ChartRaster& r) {
   for (int row = 0; row < r.h; ++row) {
     // Clear the chart itself (at offset (1, 1)) from its dilation, leaving the ring.
     std::fill(shifted.begin(), shifted.end(), 0);
-    or_shifted(shifted.data(), r.ring_words, &r.bits[static_cast<std::size_t>(row) * r.words],
-               r.words, 1);
+    or_shifted(shifted.data(), r.ring_words, &r.bits[static_cast<std::size_t>(row) * r.words], r.words, 1);
     Word* o = &ring[static_cast<std::size_t>(row + 1) * r.ring_words];
     for (int k = 0; k < r.ring_words; ++k) o[k] &= ~shifted[k];
   }
@@ -285,8 +288,10 @@ ChartOutline chart_outline(const std::vector<Vec2d>& uv, const std::vector<Face>
     for (int k = 0; k < 3; ++k) {
       const int a = f[k], b = f[(k + 1) % 3];
       used[a] = 1;
-      if (a < b) halfedges.push_back({{a, b}, 1});
-      else if (b < a) halfedges.push_back({{b, a}, -1});
+      if (a < b)
+        halfedges.push_back({{a, b}, 1});
+      else if (b < a)
+        halfedges.push_back({{b, a}, -1});
     }
   }
   std::sort(halfedges.begin(), halfedges.end());
@@ -295,7 +300,8 @@ ChartOutline chart_outline(const std::vector<Vec2d>& uv, const std::vector<Face>
     int net = 0;
     for (; j < halfedges.size() && halfedges[j].first == halfedges[i].first; ++j) net += halfedges[j].second;
     const auto [a, b] = halfedges[i].first;
-    for (int m = 0; m < std::abs(net); ++m) out.boundary.push_back(net > 0 ? std::array<int, 2>{a, b} : std::array<int, 2>{b, a});
+    for (int m = 0; m < std::abs(net); ++m)
+      out.boundary.push_back(net > 0 ? std::array<int, 2>{a, b} : std::array<int, 2>{b, a});
     i = j;
   }
   for (std::size_t v = 0; v < uv.size(); ++v)
@@ -364,9 +370,8 @@ ChartRaster rasterize_triangles(const std::vector<Vec2d>& points, const std::vec
 }
 
 std::vector<Vec2d> convex_hull(std::vector<Vec2d> p) {
-  std::sort(p.begin(), p.end(), [](const Vec2d& a, const Vec2d& b) {
-    return a.x < b.x || (a.x == b.x && a.y < b.y);
-  });
+  std::sort(p.begin(), p.end(),
+            [](const Vec2d& a, const Vec2d& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
   p.erase(std::unique(p.begin(), p.end()), p.end());
   if (p.size() < 3) return p;
   std::vector<Vec2d> h(2 * p.size());

@@ -21,7 +21,9 @@ inline int popcount(Word v) {
   return static_cast<int>((v * 0x0101010101010101ULL) >> 56);
 }
 
-inline int words_for(int bits) { return (bits + kWordBits - 1) / kWordBits; }
+inline int words_for(int bits) {
+  return (bits + kWordBits - 1) / kWordBits;
+}
 
 /// An axis-aligned rectangle of texels [x, x+w) × [y, y+h).
 struct Rect {
@@ -40,9 +42,9 @@ struct MaskWord {
 /// scaled, rotated coordinates minus `origin` (an integer vector), so moving the raster by
 /// whole texels moves the chart exactly.
 struct ChartRaster {
-  int w = 0, h = 0;      ///< size in texels
-  int words = 0;         ///< words per row of `bits`
-  Vec2d origin;          ///< chart point (scaled, rotated) that maps to texel corner (0, 0)
+  int w = 0, h = 0;        ///< size in texels
+  int words = 0;           ///< words per row of `bits`
+  Vec2d origin;            ///< chart point (scaled, rotated) that maps to texel corner (0, 0)
   std::vector<Word> bits;  ///< h rows × `words`
   std::vector<int> row_first_word, row_last_word;  ///< nonzero word range per row
   /// Per column: lowest and highest set row (col_lo > col_hi when the column is empty).

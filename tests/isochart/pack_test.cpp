@@ -6,12 +6,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <fstream>
 #include <random>
-#include <sstream>
 #include <string>
 
 #include "isochart/error.h"
+#include "isochart/io.h"
 #include "isochart/stretch.h"
 // Internal header: the fast raster is checked against the per-triangle reference.
 #include "../../libisochart/src/pack_raster.h"
@@ -105,8 +104,8 @@ std::vector<long long> touched_texels(const PackChart& c, int w, int h) {
 }
 
 struct GutterCheck {
-  long long violations = 0;  // texel pairs of different charts closer than the gutter
-  long long near_border = 0; // chart texels closer than the gutter to the border
+  long long violations = 0;   // texel pairs of different charts closer than the gutter
+  long long near_border = 0;  // chart texels closer than the gutter to the border
 };
 
 // Conservative rasters of all charts on the W×H grid: no texel of one chart may lie within
@@ -182,40 +181,6 @@ void check_packing(const std::vector<PackChart>& before, const std::vector<PackC
   CHECK(r.packing_ratio <= 1);
 }
 
-// TEMPORARY: reads v/vt/f of an OBJ until load_mesh reads texture coordinates.
-Mesh read_obj_with_uvs(const std::string& path) {
-  std::ifstream in(path);
-  REQUIRE(in);
-  Mesh m;
-  std::string line;
-  while (std::getline(in, line)) {
-    std::istringstream ls(line);
-    std::string tag;
-    ls >> tag;
-    if (tag == "v") {
-      Vec3d p;
-      ls >> p.x >> p.y >> p.z;
-      m.positions.push_back(p);
-    } else if (tag == "vt") {
-      Vec2d t;
-      ls >> t.x >> t.y;
-      m.uvs.push_back(t);
-    } else if (tag == "f") {
-      Face v{}, t{};
-      for (int k = 0; k < 3; ++k) {
-        std::string corner;
-        ls >> corner;
-        const std::size_t slash = corner.find('/');
-        v[k] = std::stoi(corner.substr(0, slash)) - 1;
-        t[k] = std::stoi(corner.substr(slash + 1)) - 1;
-      }
-      m.faces.push_back(v);
-      m.face_uvs.push_back(t);
-    }
-  }
-  return m;
-}
-
 // The charts of an atlas with their own UVs (mirrored ones turned back) and 3-D areas.
 std::vector<PackChart> atlas_charts(const Mesh& m) {
   int count = 0;
@@ -235,8 +200,8 @@ std::vector<PackChart> atlas_charts(const Mesh& m) {
       face[k] = id[t];
     }
     c.faces.push_back(face);
-    c.area_3d += triangle_area(m.positions[m.faces[f][0]], m.positions[m.faces[f][1]],
-                               m.positions[m.faces[f][2]]);
+    c.area_3d +=
+        triangle_area(m.positions[m.faces[f][0]], m.positions[m.faces[f][1]], m.positions[m.faces[f][2]]);
   }
   for (PackChart& c : charts) {
     double s = 0;
@@ -265,7 +230,9 @@ TEST_CASE("packed charts keep the gutter, one density and their winding", "[pack
     for (std::size_t v = 0; v < charts[i].uv.size(); ++v) {
       const Vec2d& q = input[i].uv[v];
       const Vec2d t = Vec2d{std::cos(p.angle) * q.x - std::sin(p.angle) * q.y,
-                            std::sin(p.angle) * q.x + std::cos(p.angle) * q.y} * p.scale + p.offset;
+                            std::sin(p.angle) * q.x + std::cos(p.angle) * q.y} *
+                          p.scale +
+                      p.offset;
       CHECK(t.x / o.width == Approx(charts[i].uv[v].x).margin(1e-9));
       CHECK(t.y / o.height == Approx(charts[i].uv[v].y).margin(1e-9));
     }
@@ -278,12 +245,13 @@ TEST_CASE("wide gutters, no gutter, one rotation and the paper's plain scheme al
     std::vector<PackChart> charts = input;
     PackOptions o;
     o.width = o.height = 256;
+    o.variants = 2;  // the ladder of variants is covered by the other tests
     if (variant == 0) o.gutter = 0;
     if (variant == 1) o.gutter = 5;
     if (variant == 2) o.rotations = 1;
     if (variant == 3) {  // §6 alone: no holes, one order, least waste only
       o.fill_holes = false;
-      o.try_orders = false;
+      o.variants = 1;
       o.growth_weight = 0;
     }
     const PackResult r = pack_charts(charts, o);
@@ -304,6 +272,7 @@ TEST_CASE("a long sliver packs with the blobs", "[pack]") {
   std::vector<PackChart> charts = input;
   PackOptions o;
   o.width = o.height = 512;
+  o.variants = 2;
   const PackResult r = pack_charts(charts, o);
   check_packing(input, charts, o, r);
 }
@@ -378,7 +347,7 @@ TEST_CASE("many tiny charts pack densely", "[pack][slow]") {
 
 TEST_CASE("charts of a real atlas pack tighter than UVAtlas packed them", "[pack]") {
   const std::string path = std::string(ISOCHARTS_SHARED_DATA) + "/baseline_atlases/bunny_uvatlas.obj";
-  const std::vector<PackChart> input = atlas_charts(read_obj_with_uvs(path));
+  const std::vector<PackChart> input = atlas_charts(load_mesh(path).mesh);
   REQUIRE(input.size() == 13);
   std::vector<PackChart> charts = input;
   PackOptions o;

@@ -28,6 +28,10 @@ struct OptimizeOptions {
   double vertex_l2_threshold = 0.0;
   /// Fraction of the kernel segment used (keeps triangles away from degeneracy).
   double conservative = 0.8;
+  /// Extra sweeps, after the main ones, over just the vertices of triangles still above the
+  /// Linf bound, with a stronger Linf weight: the worst spots are few and local, and the L2
+  /// sweeps weigh them little.
+  int linf_repair_passes = 10;
   /// Stop early when the chart cannot reach this L2 stretch: after each sweep, the L2 reached
   /// if every remaining sweep gained as much as the last one is compared with it. 0 = never.
   double give_up_l2 = 0;

@@ -46,9 +46,14 @@ struct PackOptions {
   /// around the packing. 0 is the paper's rule (least waste only); a positive weight keeps
   /// the packing near the target shape.
   double growth_weight = 0.5;
-  /// Extension beyond §6: pack in two orders, decreasing area (the paper) and decreasing
-  /// bounding-rectangle length, at every scale tried, and keep the better packing.
-  bool try_orders = true;
+  /// Extension beyond §6: greedy variants. 1 = the paper's order (decreasing area) with
+  /// `growth_weight`; 2 adds the order by decreasing length of the minimal rectangle; both
+  /// pack at every scale of the search. More (up to 6) add both orders with the other
+  /// growth weights of {0, 2}; these, with the first two, are then tried on a ladder of five
+  /// scales 1% apart above the search's result, whose largest fitting scale is kept.
+  /// 0 = automatic: 6 for up to 32 charts and textures up to 4096², else 2. Variants run in
+  /// parallel, each with its own canvas (see width).
+  int variants = 0;
   /// The scale search stops when the largest scale known to fit and the smallest known not
   /// to fit differ by less than this factor.
   double scale_tolerance = 0.005;
@@ -62,14 +67,14 @@ struct ChartPlacement {
 };
 
 struct PackResult {
-  double packing_ratio = 0;  ///< Σ chart UV area / area of the UV bounding box of all charts
-  double utilization = 0;    ///< Σ chart UV area / area of [0,1]² (texture coverage)
-  double texel_size = 0;     ///< surface length per texel (units of √area_3d), all charts
-  double seconds = 0;        ///< wall time of pack_charts
-  int used_width = 0;        ///< texels spanned by the charts' conservative raster in x
-  int used_height = 0;       ///< same in y
-  int attempts = 0;          ///< scales tried by the search (each packs every order)
-  bool by_length = false;    ///< the kept packing used the decreasing-length order
+  double packing_ratio = 0;                ///< Σ chart UV area / area of the UV bounding box of all charts
+  double utilization = 0;                  ///< Σ chart UV area / area of [0,1]² (texture coverage)
+  double texel_size = 0;                   ///< surface length per texel (units of √area_3d), all charts
+  double seconds = 0;                      ///< wall time of pack_charts
+  int used_width = 0;                      ///< texels spanned by the charts' conservative raster in x
+  int used_height = 0;                     ///< same in y
+  int attempts = 0;                        ///< scales tried (search and ladder)
+  int variant = 0;                         ///< variant kept, in the order PackOptions::variants adds them
   std::vector<ChartPlacement> placements;  ///< per input chart
 };
 
@@ -94,7 +99,8 @@ struct PackResult {
 ///   outline touches the most placed charts, if any (`fill_holes`);
 /// - side insertions also pay for growing the W:H rectangle around the packing
 ///   (`growth_weight`);
-/// - a second order, by decreasing length of the minimal rectangle (`try_orders`).
+/// - greedy variants: a second order, by decreasing length of the minimal rectangle, and
+///   other growth weights tried on a ladder of scales above the search's result (`variants`).
 ///
 /// Deterministic, and identical for any number of TBB threads.
 /// \throw InputError for invalid options or charts (empty, index out of range, NaN,
