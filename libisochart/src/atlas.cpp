@@ -19,7 +19,7 @@
 #include "isochart/geodesic.h"
 #include "isochart/stretch.h"
 #include "partition.h"
-#include "rng.h"
+#include "isochart/rng.h"
 
 namespace isochart {
 

@@ -4,23 +4,11 @@
 #include <numeric>
 #include <unordered_map>
 
+#include "isochart/union_find.h"
+
 namespace isochart {
 
 namespace {
-
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 // Fills a CSR structure from (row, value) pairs, keeping insertion order inside each row.
 void build_csr(int rows, const std::vector<std::pair<int, int>>& pairs, std::vector<int>& offsets,

@@ -5,7 +5,7 @@
 #include <limits>
 #include <numeric>
 
-#include "rng.h"
+#include "isochart/rng.h"
 
 namespace isochart {
 

@@ -17,25 +17,13 @@
 
 #include "isochart/error.h"
 
+#include "isochart/union_find.h"
+
 namespace isochart {
 
 namespace {
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 std::string text(double x) {
   if (std::isnan(x)) return "nan";

@@ -14,7 +14,7 @@
 #include "isochart/error.h"
 #include "isochart/pack.h"
 #include "isochart/stretch.h"
-#include "union_find.h"
+#include "isochart/union_find.h"
 
 namespace mcgim::detail {
 
@@ -68,7 +68,7 @@ std::vector<Chart> split_charts(const Mesh& m, const isochart::Topology& topo) {
     label = isochart::uv_charts(m, n);
   }
   const int nf = m.num_faces();
-  UnionFind uf(nf);
+  isochart::UnionFind uf(nf);
   for (int f = 0; f < nf; ++f)
     for (int k = 0; k < 3; ++k) {
       const int g = topo.opposite_face(f, k);
@@ -109,7 +109,7 @@ void split_fans(Chart& ch, const std::vector<std::pair<int, int>>& cuts) {
     const auto& fs = vf[v];
     if (fs.size() < 2) continue;
     const int n = static_cast<int>(fs.size());
-    UnionFind uf(n);
+    isochart::UnionFind uf(n);
     for (int i = 0; i < n; ++i)
       for (int j = i + 1; j < n; ++j)
         for (int a : ch.local_faces[fs[i]])

@@ -14,7 +14,7 @@
 #include "closest_point.h"
 #include "isochart/error.h"
 #include "mcgim/psnr.h"
-#include "rng.h"
+#include "isochart/rng.h"
 
 namespace mcgim {
 
@@ -35,7 +35,7 @@ std::vector<Vec3d> sample_surface(const Mesh& m, long long n, std::uint64_t seed
     total += areas[f];
   }
   if (!(total > 0)) throw isochart::InputError("", std::string("mesh ") + which + " has no face of positive area");
-  detail::Rng rng(seed);
+  isochart::Rng rng(seed);
   const double u = rng.uniform();
   std::vector<Vec3d> pts;
   pts.reserve(static_cast<std::size_t>(n));
@@ -118,8 +118,8 @@ DistanceResult measure_distance(const Mesh& a, const Mesh& b, const DistanceOpti
   if (o.samples < 1) throw isochart::InputError("", "the number of distance samples must be at least 1");
   isochart::report(progress, isochart::Stage::Distance, 0.0);
   DistanceResult r;
-  const std::vector<Vec3d> pa = sample_surface(a, o.samples, detail::mix_seed(o.seed, 0xA), "A");
-  const std::vector<Vec3d> pb = sample_surface(b, o.samples, detail::mix_seed(o.seed, 0xB), "B");
+  const std::vector<Vec3d> pa = sample_surface(a, o.samples, isochart::mix_seed(o.seed, 0xA), "A");
+  const std::vector<Vec3d> pb = sample_surface(b, o.samples, isochart::mix_seed(o.seed, 0xB), "B");
   const detail::TriangleSet ta(a), tb(b);
   const std::vector<double> dab = distances2(pa, tb, progress, 0.0, 0.5);
   const std::vector<double> dba = distances2(pb, ta, progress, 0.5, 1.0);

@@ -4,7 +4,7 @@
 
 #include "isochart/error.h"
 #include "mcgim/geometry_image.h"
-#include "union_find.h"
+#include "isochart/union_find.h"
 
 namespace mcgim {
 
@@ -154,7 +154,7 @@ Remesh reconstruct(const GeometryImage& im) {
         const int a = im.group[tris[i][k]], b = im.group[tris[i][(k + 1) % 3]];
         edges[fill[std::min(a, b)]++] = {std::max(a, b), i};
       }
-    detail::UnionFind pieces(nt);
+    isochart::UnionFind pieces(nt);
     std::vector<char> on_boundary(nt, 0);  // the triangle has an edge no other triangle shares
     for (int g = 0; g < im.num_groups; ++g) {
       std::sort(edges.begin() + offset[g], edges.begin() + offset[g + 1]);
@@ -172,7 +172,7 @@ Remesh reconstruct(const GeometryImage& im) {
       if (on_boundary[i]) piece_open[pieces.find(i)] = 1;
     }
     // Pieces sharing a vertex: cluster them through the groups.
-    detail::UnionFind clusters(nt);
+    isochart::UnionFind clusters(nt);
     std::vector<int> group_piece(im.num_groups, -1);
     for (int i = 0; i < nt; ++i)
       for (int smp : tris[i]) {

@@ -10,7 +10,7 @@
 #include <string>
 
 #include "isochart/error.h"
-#include "union_find.h"
+#include "isochart/union_find.h"
 
 namespace mcgim::detail {
 
@@ -183,7 +183,7 @@ std::vector<int> make_disk(LocalGrid& g, long long& removed, long long* cut_off 
   for (;;) {
     std::fill(out.begin(), out.end(), 0);
     std::vector<char> used(n, 0);
-    UnionFind uf(n);
+    isochart::UnionFind uf(n);
     std::vector<int> tri_count(n, 0);
     std::array<std::array<int, 3>, 2> tris;
     bool any = false;

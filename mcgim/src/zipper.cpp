@@ -9,7 +9,7 @@
 #include <string>
 
 #include "isochart/error.h"
-#include "union_find.h"
+#include "isochart/union_find.h"
 
 namespace mcgim::detail {
 
@@ -268,7 +268,7 @@ Vec2d side_texel(const AtlasCharts& a, const Placement& pl, int sid, double t) {
 // Merges the two chains of a cut path into a monotone sequence of groups, each holding one
 // sample of one side and one or more consecutive samples of the other (dynamic time warping
 // with that "star" constraint), minimizing the summed squared arc-length differences.
-void merge_chains(const Chain& A, const Chain& B, UnionFind& uf) {
+void merge_chains(const Chain& A, const Chain& B, isochart::UnionFind& uf) {
   const int M = static_cast<int>(A.samples.size()) - 1;
   const int N = static_cast<int>(B.samples.size()) - 1;
   auto cost = [&](int i, int j) {
@@ -392,12 +392,12 @@ ZipperStats zipper(const AtlasCharts& a, const Placement& pl, Sampling& sm,
     return &zips[s.chart].chains[k];
   };
   // Union-find over samples and mesh vertices (nodes are N + vertex).
-  UnionFind uf(0);
+  isochart::UnionFind uf(0);
   // Where a ring sample lies on a path (for the positions of groups without nodes).
   std::vector<int> on_path;
   std::vector<double> on_t;
   for (;;) {
-    uf = UnionFind(N + mesh.num_vertices());
+    uf = isochart::UnionFind(N + mesh.num_vertices());
     on_path.assign(N, -1);
     on_t.assign(N, 0.0);
     st.cut_paths = 0;

@@ -1,11 +1,11 @@
 #pragma once
-// Internal: disjoint sets with path halving; the smaller index becomes the root, so the
+// Disjoint sets with path halving; the smaller index becomes the root, so the
 // result does not depend on the order of unions.
 
 #include <numeric>
 #include <vector>
 
-namespace mcgim::detail {
+namespace isochart {
 
 class UnionFind {
  public:
@@ -26,4 +26,4 @@ class UnionFind {
   std::vector<int> parent_;
 };
 
-}  // namespace mcgim::detail
+}  // namespace isochart
