@@ -46,7 +46,7 @@ struct BenchArgs {
   int pack_res = 512;
   long long psnr_samples = 300'000;
   std::vector<double> sweep = {1.03, 1.06, 1.1, 1.2, 1.4};
-  int sweep_max_faces = 20'000;
+  int sweep_max_faces = 10'000;
   bool no_plots = false;
 };
 
@@ -129,6 +129,24 @@ std::vector<std::string> default_meshes(const std::string& data) {
   return out;
 }
 
+// DATA/baseline_atlases/NAME_TOOL.obj for mesh NAME, as ("external:TOOL", file), sorted.
+std::vector<std::pair<std::string, std::string>> auto_externals(const std::string& data, const std::string& name) {
+  const fs::path dir = fs::path(data) / "baseline_atlases";
+  std::error_code ec;
+  std::vector<std::string> files;
+  if (fs::is_directory(dir, ec))
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+      const std::string s = e.path().stem().string();
+      if (e.path().extension() == ".obj" && s.rfind(name + "_", 0) == 0 &&
+          s.find('_', name.size() + 1) == std::string::npos)
+        files.push_back(e.path().string());
+    }
+  std::sort(files.begin(), files.end());
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto& f : files) out.push_back({"external:" + stem(f).substr(name.size() + 1), f});
+  return out;
+}
+
 isochart::Mesh load_any(const Context& ctx, const std::string& path) {
   const std::string prefix = "builtin:";
   if (path.rfind(prefix, 0) == 0) return isochart::make_builtin(path.substr(prefix.size()));
@@ -207,7 +225,10 @@ class Bench {
   BuiltAtlas external(const std::string& file) {
     BuiltAtlas b;
     const auto t0 = Clock::now();
-    b.geometry = load_any(ctx_, file);
+    // Loaded once: an explicit external:FILE is tried against every mesh.
+    auto it = loaded_.find(file);
+    if (it == loaded_.end()) it = loaded_.emplace(file, load_any(ctx_, file)).first;
+    b.geometry = it->second;
     try {
       b.atlas = isochart::atlas_from_uvs(b.geometry);
     } catch (const isochart::InputError& e) {
@@ -317,18 +338,7 @@ class Bench {
     for (const Method& meth : methods_) {
       std::vector<std::pair<std::string, std::string>> externals;  // label, file
       if (meth.kind == Kind::ExternalAuto) {
-        const fs::path dir = fs::path(a_.data) / "baseline_atlases";
-        std::error_code ec;
-        std::vector<std::string> files;
-        if (fs::is_directory(dir, ec))
-          for (const auto& e : fs::directory_iterator(dir, ec)) {
-            const std::string s = e.path().stem().string();
-            if (e.path().extension() == ".obj" && s.rfind(name + "_", 0) == 0 &&
-                s.find('_', name.size() + 1) == std::string::npos)
-              files.push_back(e.path().string());
-          }
-        std::sort(files.begin(), files.end());
-        for (const auto& f : files) externals.push_back({"external:" + stem(f).substr(name.size() + 1), f});
+        externals = auto_externals(a_.data, name);
         if (externals.empty()) continue;  // no atlas from another tool for this mesh
       } else if (meth.kind == Kind::ExternalFile) {
         externals.push_back({"external:" + stem(meth.file), meth.file});
@@ -345,7 +355,8 @@ class Bench {
           if (!externals.empty()) {
             b = external(externals[e].second);
             if (b.geometry.num_faces() != mesh.num_faces())
-              r.note = "atlas has " + std::to_string(b.geometry.num_faces()) + " faces";
+              throw isochart::InputError("", "the atlas has " + std::to_string(b.geometry.num_faces()) +
+                                                 " faces, the mesh " + std::to_string(mesh.num_faces()));
           } else {
             b = build(mesh, meth.kind, a_.max_l2, meth.kind == Kind::LscmStretch ? lscm_cache.get() : nullptr);
             if (meth.kind == Kind::Lscm) lscm_cache = std::make_unique<isochart::Atlas>(b.atlas);
@@ -369,15 +380,21 @@ class Bench {
   }
 
   void sweep(const isochart::Mesh& mesh, const std::string& name) {
+    std::map<double, isochart::Atlas> lscm;  // lscm+stretch optimizes the lscm charts of its bound
     for (const Method& meth : methods_) {
       if (meth.kind == Kind::ExternalAuto || meth.kind == Kind::ExternalFile) continue;
       for (double bound : a_.sweep) {
         SweepPoint p{name, meth.name, bound, 0, NAN};
         try {
-          const BuiltAtlas b = build(mesh, meth.kind, bound, nullptr);
+          const auto it = lscm.find(bound);
+          const bool reuse = meth.kind == Kind::LscmStretch && it != lscm.end();
+          const BuiltAtlas b = build(mesh, meth.kind, bound, reuse ? &it->second : nullptr);
+          if (meth.kind == Kind::Lscm) lscm[bound] = b.atlas;
           p.charts = b.atlas.num_charts();
           p.l2 = b.atlas.stats.l2;
         } catch (const isochart::Cancelled&) {
+          throw;
+        } catch (const std::bad_alloc&) {
           throw;
         } catch (const std::exception&) {
           continue;  // a bound a method cannot meet leaves a gap in its curve
@@ -401,6 +418,7 @@ class Bench {
   isochart::PackOptions pack_;
   std::vector<Row> rows_;
   std::vector<SweepPoint> sweep_;
+  std::map<std::string, isochart::Mesh> loaded_;
 };
 
 // ---- Output ---------------------------------------------------------------------------------
@@ -624,15 +642,26 @@ void draw_axes(Canvas& c, const Axes& ax, const std::string& title, const std::s
   }
   c.line(ax.x0, ax.y0, ax.x0, ax.y1, kBlack);
   c.line(ax.x0, ax.y1, ax.x1, ax.y1, kBlack);
-  c.text((ax.x0 + ax.x1 - Canvas::text_width(title, 3)) / 2, 8, title, 3);
+  c.text(std::max(4, (ax.x0 + ax.x1 - Canvas::text_width(title, 3)) / 2), 8, title, 3);
   c.text((ax.x0 + ax.x1 - Canvas::text_width(xlabel)) / 2, c.height() - 18, xlabel);
   c.text(6, ax.y0 - 22, ylabel);
+}
+
+// One colour per method in every plot.
+Rgb color_of(const std::string& method) {
+  static const char* known[] = {"isochart", "isomap-nocut", "lscm", "lscm+stretch", "external:uvatlas",
+                                "external:xatlas"};
+  for (int i = 0; i < 6; ++i)
+    if (method == known[i]) return kPalette[i];
+  std::size_t h = 0;
+  for (char ch : method) h = h * 31 + static_cast<unsigned char>(ch);
+  return kPalette[6 + h % 2];
 }
 
 void legend(Canvas& c, int x, int y, const std::vector<std::string>& names) {
   for (std::size_t i = 0; i < names.size(); ++i) {
     const int yy = y + static_cast<int>(i) * 16;
-    c.rect(x, yy, x + 10, yy + 9, kPalette[i % 8]);
+    c.rect(x, yy, x + 10, yy + 9, color_of(names[i]));
     c.text(x + 16, yy, names[i]);
   }
 }
@@ -659,8 +688,8 @@ isochart::Image plot_sweep(const std::vector<SweepPoint>& pts, const std::string
     for (std::size_t i = 0; i < s.size(); ++i) {
       const double x = ax.px(s[i]->charts), y = ax.py(s[i]->l2);
       c.rect(static_cast<int>(x) - 3, static_cast<int>(y) - 3, static_cast<int>(x) + 3, static_cast<int>(y) + 3,
-             kPalette[m % 8]);
-      if (i > 0) c.line(ax.px(s[i - 1]->charts), ax.py(s[i - 1]->l2), x, y, kPalette[m % 8], 2);
+             color_of(methods[m]));
+      if (i > 0) c.line(ax.px(s[i - 1]->charts), ax.py(s[i - 1]->l2), x, y, color_of(methods[m]), 2);
     }
   }
   legend(c, 465, 60, methods);
@@ -680,7 +709,7 @@ isochart::Image plot_psnr(const std::vector<Row>& rows) {
   }
   if (meshes.empty()) return Canvas(320, 120).image();
   const int group = std::max(60, 10 * static_cast<int>(methods.size()) + 14);
-  const int w = 90 + group * static_cast<int>(meshes.size()) + 190;
+  const int w = std::max(640, 90 + group * static_cast<int>(meshes.size()) + 190);
   Canvas c(w, 440);
   Axes ax{90, 50, 90 + group * static_cast<int>(meshes.size()), 370, 0, 1, std::floor(lo - 3), std::ceil(hi + 1)};
   draw_axes(c, ax, "GEOMETRY PSNR AT MATCHED DEFINED SAMPLES", "MESH", "PSNR DB", false);
@@ -690,7 +719,7 @@ isochart::Image plot_psnr(const std::vector<Row>& rows) {
       for (const Row& r : rows)
         if (r.mesh == meshes[mi] && r.method == methods[k] && std::isfinite(r.psnr)) {
           const int x = gx + static_cast<int>(k) * 10;
-          c.rect(x, static_cast<int>(ax.py(r.psnr)), x + 8, ax.y1 - 1, kPalette[k % 8]);
+          c.rect(x, static_cast<int>(ax.py(r.psnr)), x + 8, ax.y1 - 1, color_of(methods[k]));
         }
     // Names at scale 1 on two staggered rows so long names do not collide.
     const std::string& n = meshes[mi];
@@ -737,7 +766,10 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
 
   Bench bench(ctx, a, methods);
   int k = 0;
-  const int n = static_cast<int>(a.meshes.size() * methods.size());
+  int n = 0;
+  for (const auto& m : a.meshes)
+    for (const Method& meth : methods)
+      n += meth.kind == Kind::ExternalAuto ? static_cast<int>(auto_externals(a.data, stem(m)).size()) : 1;
   for (const auto& m : a.meshes) bench.run_mesh(m, k, n);
 
   const std::string md = to_markdown(bench.rows(), bench.sweep_points(), a);
