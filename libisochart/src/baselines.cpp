@@ -5,6 +5,7 @@
 #include "isochart/baselines.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -118,6 +119,7 @@ class LscmBuilder {
     for (int f = 0; f < mesh_.num_faces(); ++f) pending[topo_.face_components()[f]].push_back(f);
     std::vector<Region> done;
     double seconds_clustering = 0, seconds_param = 0;
+    int splits = 0;
     // Rounds: every pending region is tried (in parallel); failures are split and retried in the
     // next round. Outputs are stored by index, so the order never depends on threads.
     while (!pending.empty()) {
@@ -136,10 +138,12 @@ class LscmBuilder {
       });
       seconds_clustering += since(tc);
       for (std::size_t i = 0; i < tried.size(); ++i) {
-        if (tried[i].accepted)
+        if (tried[i].accepted) {
           done.push_back(std::move(tried[i]));
-        else
+        } else {
+          ++splits;
           for (auto& p : parts[i]) next.push_back(std::move(p));
+        }
       }
       pending = std::move(next);
       long long left = 0;
@@ -179,7 +183,7 @@ class LscmBuilder {
     pack_atlas(mesh_, atlas, o_.pack, progress_);
     atlas.stats.seconds["packing"] = since(tk);
     atlas.stats.seconds["total"] = since(t0);
-    atlas.stats.splits = 0;
+    atlas.stats.splits = splits;
     return atlas;
   }
 
@@ -398,6 +402,7 @@ void optimize_atlas_stretch(const Mesh& mesh, Atlas& atlas, const OptimizeOption
                             const PackOptions& pack, const Progress& progress) {
   const auto t0 = Clock::now();
   std::vector<LocalChart> charts = local_charts(mesh, atlas);
+  std::atomic<int> finished{0};
   tbb::parallel_for(std::size_t(0), charts.size(), [&](std::size_t c) {
     LocalChart& ch = charts[c];
     OptimizeOptions o = options;
@@ -406,7 +411,7 @@ void optimize_atlas_stretch(const Mesh& mesh, Atlas& atlas, const OptimizeOption
     std::vector<Vec2d> uv = ch.uv;
     const OptimizeResult r = optimize_stretch(ch.positions, ch.tris, uv, o);
     if (r.after.flipped == 0 && r.after.l2 <= r.before.l2 && !self_overlaps(ch.tris, uv)) ch.uv = std::move(uv);
-    report(progress, Stage::Optimization, 0.0);
+    report(progress, Stage::Optimization, static_cast<double>(++finished) / charts.size());
   });
   for (std::size_t c = 0; c < charts.size(); ++c) {
     const LocalChart& ch = charts[c];

@@ -57,7 +57,10 @@ TEST_CASE("lscm baseline: valid disk charts on built-in meshes", "[baselines]") 
     CHECK(a.stats.l2 <= o.max_l2);
     CHECK(a.stats.linf <= o.max_linf);
     if (name == "face") CHECK(a.num_charts() <= 4);  // a disk of low curvature needs few cuts
-    if (name != "face") CHECK(a.num_charts() >= 2);  // closed surfaces must be cut
+    if (name != "face") {
+      CHECK(a.num_charts() >= 2);  // closed surfaces must be cut
+      CHECK(a.stats.splits >= 1);
+    }
   }
 }
 

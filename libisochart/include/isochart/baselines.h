@@ -39,7 +39,8 @@ struct LscmOptions {
 /// whose LSCM parameterization (CGAL's LSCM_parameterizer_3, two pinned border vertices) has no
 /// flipped triangle, no self-overlap, and stretch within `max_l2` / `max_linf`. Charts are
 /// packed with pack_atlas. Deterministic, identical for any thread count.
-/// Seconds per stage in `stats.seconds`: "clustering", "parameterization", "packing", "total".
+/// `stats.splits` counts the two-way splits; seconds per stage are in `stats.seconds`:
+/// "clustering", "parameterization", "packing", "total".
 /// \throw InputError for invalid options or a mesh without faces or not edge-manifold.
 /// \throw Cancelled when `progress` returns false.
 Atlas build_lscm_atlas(const Mesh& mesh, const LscmOptions& options = {}, const Progress& progress = {});
