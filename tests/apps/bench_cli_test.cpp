@@ -1,0 +1,197 @@
+// `isocharts bench` end to end on small inputs: matched defined samples, outputs written
+// completely (and nothing else left in the directory), per-row failures, bad inputs.
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("isocharts_bench_test_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+int run_cli(const std::string& args, const fs::path& err) {
+  const std::string cmd = std::string("'") + ISOCHARTS_CLI + "' " + args + " > /dev/null 2> '" + err.string() + "'";
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::vector<std::string> split(const std::string& s, char sep) {
+  std::vector<std::string> out;
+  std::string cur;
+  bool quoted = false;
+  for (char c : s) {
+    if (c == '"') {
+      quoted = !quoted;  // CSV quoting: the quotes are not part of the value
+      continue;
+    }
+    if (c == sep && !quoted) {
+      out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  return out;
+}
+
+// CSV rows as column-name → value maps.
+std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p) {
+  std::istringstream in(slurp(p));
+  std::string line;
+  std::getline(in, line);
+  const auto header = split(line, ',');
+  std::vector<std::map<std::string, std::string>> rows;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    const auto cells = split(line, ',');
+    REQUIRE(cells.size() == header.size());
+    std::map<std::string, std::string> r;
+    for (std::size_t i = 0; i < header.size(); ++i) r[header[i]] = cells[i];
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+int count_lines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+}  // namespace
+
+TEST_CASE("bench: every method lands within 2% of the reference's defined samples", "[bench]") {
+  const fs::path dir = fresh_dir("torus");
+  const fs::path err = dir / "stderr.txt";
+  const fs::path out = dir / "out";
+  REQUIRE(run_cli("bench builtin:torus --methods isochart,lscm,lscm+stretch,isomap-nocut --res 64 "
+                  "--psnr-samples 20000 --sweep 1.1,1.4 --pack-res 256 --out '" + out.string() + "'",
+                  err) == 0);
+  const auto rows = read_csv(out / "bench.csv");
+  REQUIRE(rows.size() == 4);
+  const long long target = std::stoll(rows[0].at("defined_samples"));
+  CHECK(rows[0].at("width") == "64");
+  for (const auto& r : rows) {
+    INFO(r.at("method") << " " << r.at("note"));
+    CHECK(r.at("mesh") == "torus");
+    REQUIRE(r.at("note").empty());
+    CHECK(std::stoi(r.at("charts")) >= 1);
+    CHECK(std::stoll(r.at("target_samples")) == target);
+    const long long d = std::stoll(r.at("defined_samples"));
+    CHECK(std::llabs(d - target) * 50 <= target);
+    CHECK(std::stoll(r.at("unique_samples")) <= d);
+    const double psnr = std::stod(r.at("psnr_db"));
+    CHECK(psnr > 30);
+    CHECK(psnr < 200);
+  }
+  // The sweep: two bounds per method. lscm splits along one fixed tree whatever the bound, so
+  // its looser bound can never need more charts.
+  const auto sweep = read_csv(out / "sweep.csv");
+  REQUIRE(sweep.size() == 8);
+  for (std::size_t i = 0; i + 1 < sweep.size(); i += 2) {
+    CHECK(sweep[i].at("method") == sweep[i + 1].at("method"));
+    CHECK(sweep[i].at("max_l2") == "1.1");
+    CHECK(sweep[i + 1].at("max_l2") == "1.4");
+    CHECK(std::isfinite(std::stod(sweep[i].at("l2"))));
+    if (sweep[i].at("method") == "lscm") {
+      CHECK(std::stod(sweep[i].at("l2")) <= 1.1);
+      CHECK(std::stoi(sweep[i + 1].at("charts")) <= std::stoi(sweep[i].at("charts")));
+    }
+  }
+  const std::string md = slurp(out / "bench.md");
+  CHECK(md.find("| torus | 5184 | lscm+stretch |") != std::string::npos);
+  CHECK(md.find("![psnr.png](psnr.png)") != std::string::npos);
+  // The outputs and nothing else: atomic writes leave no temporary files behind.
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(out)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  CHECK(names == std::vector<std::string>{"bench.csv", "bench.md", "psnr.png", "stretch_torus.png", "sweep.csv"});
+  for (const char* png : {"psnr.png", "stretch_torus.png"}) {
+    const auto size = fs::file_size(out / png);
+    CHECK(size > 1000);
+    CHECK(size < 100'000);
+  }
+}
+
+TEST_CASE("bench: an external atlas the sampler rejects is an n/a row, not an abort", "[bench]") {
+  const fs::path dir = fresh_dir("holed_torus");
+  // A torus with one face removed, texture coordinates its projection on the equatorial plane:
+  // one continuous chart with one boundary loop and genus 1, which no MCGIM can sample.
+  std::ostringstream obj;
+  const int nu = 16, nv = 8;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double a = 2 * M_PI * i / nu, b = 2 * M_PI * j / nv, rad = 2 + 0.7 * std::cos(b);
+      const double x = rad * std::cos(a), y = rad * std::sin(a), z = 0.7 * std::sin(b);
+      obj << "v " << x << " " << y << " " << z << "\n";
+      obj << "vt " << 0.5 + 0.15 * x << " " << 0.5 + 0.15 * y << "\n";
+    }
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      if (i == 0 && j == 0) continue;  // the hole
+      const int a = i * nv + j + 1, b = ((i + 1) % nu) * nv + j + 1, c = i * nv + (j + 1) % nv + 1,
+                d = ((i + 1) % nu) * nv + (j + 1) % nv + 1;
+      obj << "f " << a << "/" << a << " " << b << "/" << b << " " << d << "/" << d << "\n";
+      obj << "f " << a << "/" << a << " " << d << "/" << d << " " << c << "/" << c << "\n";
+    }
+  const fs::path mesh = dir / "holed_torus.obj";
+  std::ofstream(mesh) << obj.str();
+  const fs::path out = dir / "out";
+  const fs::path err = dir / "stderr.txt";
+  REQUIRE(run_cli("bench '" + mesh.string() + "' --methods isochart,external:'" + mesh.string() +
+                      "' --res 48 --psnr-samples 5000 --sweep none --no-plots --out '" + out.string() + "'",
+                  err) == 0);
+  const auto rows = read_csv(out / "bench.csv");
+  REQUIRE(rows.size() == 2);
+  CHECK(rows[0].at("note").empty());
+  CHECK(rows[1].at("method") == "external:holed_torus");
+  CHECK(rows[1].at("note").rfind("n/a: ", 0) == 0);
+  CHECK(rows[1].at("psnr_db").empty());
+}
+
+TEST_CASE("bench: bad inputs are one line and exit code 2", "[bench]") {
+  const fs::path dir = fresh_dir("bad");
+  const fs::path err = dir / "stderr.txt";
+  const std::string out = " --out '" + (dir / "out").string() + "'";
+  struct Case {
+    std::string args, expect;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"bench builtin:sphere --methods isochart,foo", "unknown method 'foo'"},
+           {"bench builtin:sphere --methods isochart,isochart", "given twice"},
+           {"bench builtin:sphere --methods external:/nonexistent/x.obj", "/nonexistent/x.obj: no such file"},
+           {"bench /nonexistent/mesh.obj --methods isochart", "/nonexistent/mesh.obj: no such file"},
+           {"bench builtin:sphere --res 3", "--res must be between 8 and 4096"},
+           {"bench builtin:sphere --sweep 1.1,abc", "--sweep: 'abc'"},
+       }) {
+    INFO(c.args);
+    CHECK(run_cli(c.args + out, err) == 2);
+    const std::string e = slurp(err);
+    CHECK(count_lines(e) == 1);
+    CHECK(e.rfind("isocharts: error: ", 0) == 0);
+    CHECK(e.find(c.expect) != std::string::npos);
+  }
+}
