@@ -24,6 +24,7 @@ struct SynthArgs {
   std::string output;
   std::string exemplar = "builtin:bricks";
   double scale = 0;
+  double pixels_per_texel = 0;
   std::vector<double> direction;
   std::vector<int> levels = {128, 64, 32};
   int neighborhood = 5;
@@ -79,6 +80,8 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
 
   synth::SynthOptions so;
   so.scale = a.scale;
+  so.pixels_per_texel = a.pixels_per_texel;
+  if (a.scale > 0 && a.pixels_per_texel > 0) bad_option("--scale and --pixels-per-texel are exclusive");
   if (!a.direction.empty()) so.direction = {a.direction[0], a.direction[1], a.direction[2]};
   so.neighborhood = a.neighborhood;
   so.coarse_neighborhood = a.coarse_neighborhood;
@@ -158,6 +161,10 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--scale", args->scale,
                   "Exemplar pixels per unit of surface length (default: the exemplar spans a tenth of the "
                   "bounding-box diagonal)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--pixels-per-texel", args->pixels_per_texel,
+                  "Instead of --scale: exemplar pixels per texel of the finest level (1 = the exemplar at "
+                  "full resolution)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--direction", args->direction, "Exemplar x axis on the surface, x,y,z (default: smooth field)")
       ->delimiter(',');

@@ -167,6 +167,8 @@ LevelGeometry& LevelGeometry::operator=(LevelGeometry&& o) noexcept {
 
 Vec3d LevelGeometry::t1(int s) const { return impl_->t1[s]; }
 Vec3d LevelGeometry::t2(int s) const { return impl_->t2[s]; }
+Vec3d LevelGeometry::dpdx(int s) const { return impl_->dx[s]; }
+Vec3d LevelGeometry::dpdy(int s) const { return impl_->dy[s]; }
 double LevelGeometry::texel_size(int s) const { return impl_->texel[s]; }
 
 Vec3d LevelGeometry::position(const Tap& t) const {

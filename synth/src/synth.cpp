@@ -63,16 +63,25 @@ std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& dire
 
 namespace {
 
-// Exemplar neighbourhood vectors of one level, their PCA and kd-tree.
-struct Matcher {
-  int dim = 0, pca = 0;
-  int width = 0, height = 0;
-  std::vector<int> centres;         // exemplar pixel of each candidate
-  std::vector<float> features;      // candidates × dim
+// A kd-tree over the PCA projection of components [first, first + count) of the exemplar's
+// neighbourhood vectors.
+struct KdIndex {
+  int first = 0, count = 0, pca = 0;
   Eigen::VectorXf mean;
-  Eigen::MatrixXf basis;            // dim × pca
+  Eigen::MatrixXf basis;            // count × pca
   std::vector<float> projected;     // candidates × pca
   std::unique_ptr<flann::Index<flann::L2<float>>> index;
+};
+
+// Exemplar neighbourhood vectors of one level and their kd-trees.
+struct Matcher {
+  int dim = 0;
+  int width = 0, height = 0;
+  std::vector<int> centres;         // exemplar pixel of each candidate
+  std::vector<int> candidate_of;    // exemplar pixel → candidate, −1 when not one
+  std::vector<float> features;      // candidates × dim
+  KdIndex full;                     // every component (non-causal passes)
+  KdIndex coarse;                   // coarser-level components only (first pass), if any
   double variance = 0;              // mean per-component variance of the exemplar colours
 };
 
@@ -116,22 +125,34 @@ Matcher build_matcher(const Image& e, const Image* coarse, double ratio, int n, 
   for (int y = inner ? r : 0; y < (inner ? e.height - r : e.height); ++y)
     for (int x = inner ? r : 0; x < (inner ? e.width - r : e.width); ++x) m.centres.push_back(y * e.width + x);
   const int count = static_cast<int>(m.centres.size());
+  m.candidate_of.assign(static_cast<std::size_t>(e.width) * e.height, -1);
+  for (int i = 0; i < count; ++i) m.candidate_of[m.centres[i]] = i;
   m.features.resize(static_cast<std::size_t>(count) * m.dim);
   tbb::parallel_for(0, count, [&](int i) {
     exemplar_neighborhood(e, coarse, ratio, n, nc, m.centres[i] % e.width, m.centres[i] / e.width,
                           &m.features[static_cast<std::size_t>(i) * m.dim]);
   });
   Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> f(m.features.data(), count, m.dim);
-  m.mean = f.colwise().mean().transpose();
-  const Eigen::MatrixXf centred = f.rowwise() - m.mean.transpose();
-  const Eigen::MatrixXd cov = (centred.transpose() * centred).cast<double>() / std::max(1, count);
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(cov);
-  m.pca = std::min(pca_dims, m.dim);
-  // Eigenvalues come in increasing order: keep the last `pca` vectors.
-  m.basis = eig.eigenvectors().rightCols(m.pca).cast<float>();
-  m.projected.resize(static_cast<std::size_t>(count) * m.pca);
-  Eigen::Map<Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> p(m.projected.data(), count, m.pca);
-  p = centred * m.basis;
+  auto build = [&](KdIndex& kd, int first, int comps) {
+    kd.first = first;
+    kd.count = comps;
+    const Eigen::MatrixXf block = f.middleCols(first, comps);
+    kd.mean = block.colwise().mean().transpose();
+    const Eigen::MatrixXf centred = block.rowwise() - kd.mean.transpose();
+    const Eigen::MatrixXd cov = (centred.transpose() * centred).cast<double>() / std::max(1, count);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(cov);
+    kd.pca = std::min(pca_dims, comps);
+    // Eigenvalues come in increasing order: keep the last `pca` vectors.
+    kd.basis = eig.eigenvectors().rightCols(kd.pca).cast<float>();
+    kd.projected.resize(static_cast<std::size_t>(count) * kd.pca);
+    Eigen::Map<Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> p(kd.projected.data(), count, kd.pca);
+    p = centred * kd.basis;
+    flann::Matrix<float> data(kd.projected.data(), count, kd.pca);
+    kd.index = std::make_unique<flann::Index<flann::L2<float>>>(data, flann::KDTreeSingleIndexParams(12));
+    kd.index->buildIndex();
+  };
+  build(m.full, 0, m.dim);
+  if (coarse) build(m.coarse, 3 * n * n, m.dim - 3 * n * n);
   double var = 0;
   for (int c = 0; c < 3; ++c) {
     double s = 0, s2 = 0;
@@ -143,9 +164,6 @@ Matcher build_matcher(const Image& e, const Image* coarse, double ratio, int n, 
     var += std::max(0.0, s2 / (e.width * e.height) - mu * mu);
   }
   m.variance = var / 3;
-  flann::Matrix<float> data(m.projected.data(), count, m.pca);
-  m.index = std::make_unique<flann::Index<flann::L2<float>>>(data, flann::KDTreeSingleIndexParams(12));
-  m.index->buildIndex();
   return m;
 }
 
@@ -155,22 +173,31 @@ struct Match {
 };
 
 // `query`: dim values; `valid`: dim/3 flags per tap (a missing tap is left out).
-Match best_match(const Matcher& m, const float* query, const std::vector<char>& valid, int candidates) {
-  Eigen::VectorXf q(m.dim);
-  for (int i = 0; i < m.dim; ++i) q[i] = valid[i / 3] ? query[i] - m.mean[i] : 0.0f;
-  Eigen::VectorXf proj = m.basis.transpose() * q;
+// `coherent`: further exemplar pixels to re-rank (Ashikhmin's coherent candidates: where the
+// already-chosen neighbours' exemplar positions say this sample should continue).
+// Candidates come from `kd` (missing components at the mean), then are re-ranked exactly.
+Match best_match(const Matcher& m, const KdIndex& kd, const float* query, const std::vector<char>& valid,
+                 int candidates, const std::vector<int>& coherent) {
+  Eigen::VectorXf q(kd.count);
+  for (int i = 0; i < kd.count; ++i) {
+    const int c = kd.first + i;
+    q[i] = valid[c / 3] ? query[c] - kd.mean[i] : 0.0f;
+  }
+  Eigen::VectorXf proj = kd.basis.transpose() * q;
   const int k = std::min<int>(candidates, static_cast<int>(m.centres.size()));
   std::vector<int> idx(k);
   std::vector<float> dist(k);
-  flann::Matrix<float> qm(proj.data(), 1, m.pca);
+  flann::Matrix<float> qm(proj.data(), 1, kd.pca);
   flann::Matrix<int> im(idx.data(), 1, k);
   flann::Matrix<float> dm(dist.data(), 1, k);
-  m.index->knnSearch(qm, im, dm, k, flann::SearchParams(-1, 1.0f));
+  kd.index->knnSearch(qm, im, dm, k, flann::SearchParams(-1, 1.0f));
   Match best;
   best.error = std::numeric_limits<double>::infinity();
   int count = 0;
   for (int i = 0; i < m.dim; ++i) count += valid[i / 3] ? 1 : 0;
-  for (int j = 0; j < k; ++j) {
+  for (int px : coherent)
+    if (px >= 0 && m.candidate_of[px] >= 0) idx.push_back(m.candidate_of[px]);
+  for (std::size_t j = 0; j < idx.size(); ++j) {
     if (idx[j] < 0) continue;
     const float* f = &m.features[static_cast<std::size_t>(idx[j]) * m.dim];
     double d = 0;
@@ -222,7 +249,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     throw isochart::InputError("", "neighborhood must be odd and at least 3");
   if (o.coarse_neighborhood < 1 || o.coarse_neighborhood % 2 == 0)
     throw isochart::InputError("", "coarse neighborhood must be odd and at least 1");
-  if (o.causal_batches < 1 || o.full_passes < 0 || o.coarsest_passes < 0 || o.candidates < 1 || o.pca_dims < 1)
+  if (o.causal_batches < 0 || o.full_passes < 0 || o.coarsest_passes < 0 || o.candidates < 1 || o.pca_dims < 1)
     throw isochart::InputError("", "synthesis passes, batches, candidates and PCA dimensions must be positive");
   if (!(o.scale >= 0) || !std::isfinite(o.scale)) throw isochart::InputError("", "scale must be positive");
   if (exemplar.channels != 3 || exemplar.width < 4 || exemplar.height < 4)
@@ -230,7 +257,11 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
 
   SynthResult res;
   const int nl = static_cast<int>(pyramid.size());
-  res.scale = o.scale > 0 ? o.scale : exemplar.width / (0.1 * isochart::bounding_box(atlas).diagonal());
+  if (!(o.pixels_per_texel >= 0) || !std::isfinite(o.pixels_per_texel))
+    throw isochart::InputError("", "pixels per texel must be positive");
+  res.scale = o.pixels_per_texel > 0 && pyramid[0].stats.texel_size > 0 ? o.pixels_per_texel / pyramid[0].stats.texel_size
+              : o.scale > 0                                               ? o.scale
+                                        : exemplar.width / (0.1 * isochart::bounding_box(atlas).diagonal());
 
   // Exemplar pyramid: one level per MCGIM level, a pixel the size of that level's texel.
   std::vector<double> factors(nl);
@@ -323,12 +354,41 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
 
     std::vector<Color>& col = res.group_colors[l];
     col.assign(groups, Color{0.5f, 0.5f, 0.5f});
+    std::vector<int> src(groups, -1);  // exemplar pixel each group was copied from
+    auto set_pixel = [&](std::vector<Color>& cs, std::vector<int>& ss, int gi, int px) {
+      for (int c = 0; c < 3; ++c) cs[gi][c] = e.pixels[px * 3 + c];
+      ss[gi] = px;
+    };
     if (!has_coarse) {
-      // Coarsest level: exemplar colours at random.
+      // Coarsest level: each chart starts as a copy of the exemplar at a random offset, laid
+      // out by the direction field (per-sample noise would make the first non-causal passes
+      // regress to the exemplar's mean colour).
+      std::vector<std::array<double, 3>> centre(g.num_charts, {0, 0, 0});
       for (int gi = 0; gi < groups; ++gi) {
-        isochart::Rng rng(isochart::mix_seed(o.seed, static_cast<std::uint64_t>(gi)));
-        const int px = static_cast<int>(rng.below(static_cast<std::uint64_t>(e.width) * e.height));
-        for (int c = 0; c < 3; ++c) col[gi][c] = e.pixels[px * 3 + c];
+        const int s = reps[l][gi];
+        if (s < 0) continue;
+        auto& c = centre[g.chart[s]];
+        c[0] += s % g.width + 0.5, c[1] += s / g.width + 0.5, c[2] += 1;
+      }
+      auto reflect = [](double v, int size) {
+        const double period = 2.0 * size;
+        v = std::fmod(v, period);
+        if (v < 0) v += period;
+        if (v >= size) v = period - v - 1e-9;
+        return std::clamp(static_cast<int>(v), 0, size - 1);
+      };
+      for (int gi = 0; gi < groups; ++gi) {
+        const int s = reps[l][gi];
+        if (s < 0) continue;
+        const int ch = g.chart[s];
+        isochart::Rng rng(isochart::mix_seed(o.seed, 5000u + static_cast<std::uint64_t>(ch)));
+        const double ox = rng.uniform() * e.width, oy = rng.uniform() * e.height;
+        const auto& c = centre[ch];
+        const double ddx = s % g.width + 0.5 - c[0] / c[2], ddy = s / g.width + 0.5 - c[1] / c[2];
+        const Vec3d w = geo[l].dpdx(s) * ddx + geo[l].dpdy(s) * ddy;
+        const int px = reflect(ox + isochart::dot(geo[l].t1(s), w) / spacing, e.width);
+        const int py = reflect(oy - isochart::dot(geo[l].t2(s), w) / spacing, e.height);
+        set_pixel(col, src, gi, py * e.width + px);
       }
     } else {
       // Upsampled from the coarser level through the correspondence.
@@ -367,20 +427,41 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
         for (int c = 0; c < 3; ++c) q[k * 3 + c] = ok ? v[c] : 0.0f;
       }
     };
+    // Coherent candidates: the exemplar pixel that continues each synthesized neighbour.
+    const int r = n / 2;
+    auto coherent = [&](int gi, const std::vector<int>& ss, const std::vector<char>* done, std::vector<int>& out) {
+      out.clear();
+      const Tap* t = &lt.taps[static_cast<std::size_t>(gi) * per];
+      for (int k = 0; k < lt.fine; ++k) {
+        if (!t[k].valid()) continue;
+        int j = 0;
+        for (int i = 1; i < 4 && t[k].sample[i] >= 0; ++i)
+          if (t[k].weight[i] > t[k].weight[j]) j = i;
+        const int grp = g.group[t[k].sample[j]];
+        if ((done && !(*done)[grp]) || ss[grp] < 0) continue;
+        const int a = k % n - r, b = k / n - r;
+        const int x = ss[grp] % e.width - a, y = ss[grp] / e.width + b;
+        if (x < 0 || y < 0 || x >= e.width || y >= e.height) continue;
+        out.push_back(y * e.width + x);
+      }
+    };
     auto run_pass = [&](const std::vector<int>& which, const std::vector<char>* done, std::vector<Color>& out,
-                        std::vector<double>* errors) {
+                        std::vector<int>& out_src, std::vector<double>* errors) {
       tbb::parallel_for(tbb::blocked_range<int>(0, static_cast<int>(which.size()), 64),
                         [&](const tbb::blocked_range<int>& range) {
                           std::vector<float> q(matcher.dim);
                           std::vector<char> valid(per);
+                          std::vector<int> coh;
                           for (int i = range.begin(); i < range.end(); ++i) {
                             const int gi = which[i];
                             if (reps[l][gi] < 0) continue;
                             gather(gi, col, done, q.data(), valid);
                             if (std::none_of(valid.begin(), valid.end(), [](char c) { return c != 0; })) continue;
-                            const Match mt = best_match(matcher, q.data(), valid, o.candidates);
+                            coherent(gi, src, done, coh);
+                            const Match mt = best_match(matcher, done && has_coarse ? matcher.coarse : matcher.full,
+                                                        q.data(), valid, o.candidates, coh);
                             if (mt.pixel < 0) continue;
-                            for (int c = 0; c < 3; ++c) out[gi][c] = e.pixels[mt.pixel * 3 + c];
+                            set_pixel(out, out_src, gi, mt.pixel);
                             if (errors) (*errors)[gi] = mt.error;
                           }
                         });
@@ -388,18 +469,41 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     std::vector<int> all(groups);
     std::iota(all.begin(), all.end(), 0);
     if (has_coarse) {
-      // First pass: coarser level plus what earlier batches synthesized, in a random order.
+      // First pass: coarser level plus what earlier samples synthesized, in a random order.
       std::vector<int> order = all;
       isochart::Rng rng(isochart::mix_seed(o.seed, 1000u + static_cast<std::uint64_t>(l)));
       for (int i = groups - 1; i > 0; --i) std::swap(order[i], order[rng.below(static_cast<std::uint64_t>(i) + 1)]);
       std::vector<char> done(groups, 0);
-      const int nb = std::min(o.causal_batches, std::max(1, groups));
+      if (o.causal_batches == 0) {
+        // Wei–Levoy's order exactly: one sample at a time, each seeing all earlier ones.
+        std::vector<float> q(matcher.dim);
+        std::vector<char> valid(per);
+        std::vector<int> coh;
+        for (int i = 0; i < groups; ++i) {
+          const int gi = order[i];
+          if (reps[l][gi] >= 0) {
+            gather(gi, col, &done, q.data(), valid);
+            if (std::any_of(valid.begin(), valid.end(), [](char c) { return c != 0; })) {
+              coherent(gi, src, &done, coh);
+              const Match mt = best_match(matcher, matcher.coarse, q.data(), valid, o.candidates, coh);
+              if (mt.pixel >= 0) set_pixel(col, src, gi, mt.pixel);
+            }
+          }
+          done[gi] = 1;
+          if ((i & 4095) == 0)
+            isochart::report(progress, isochart::Stage::Synthesis,
+                             0.05 + 0.9 * ((nl - 1 - l) + 0.5 * i / double(groups)) / nl);
+        }
+      }
+      const int nb = o.causal_batches == 0 ? 0 : std::min(o.causal_batches, std::max(1, groups));
       for (int b = 0; b < nb; ++b) {
         const std::vector<int> batch(order.begin() + static_cast<long>(groups) * b / nb,
                                      order.begin() + static_cast<long>(groups) * (b + 1) / nb);
         std::vector<Color> next = col;
-        run_pass(batch, &done, next, nullptr);
+        std::vector<int> next_src = src;
+        run_pass(batch, &done, next, next_src, nullptr);
         col.swap(next);
+        src.swap(next_src);
         for (int gi : batch) done[gi] = 1;
         isochart::report(progress, isochart::Stage::Synthesis,
                          0.05 + 0.9 * ((nl - 1 - l) + 0.5 * (b + 1) / nb) / nl);
@@ -408,14 +512,17 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     const int passes = has_coarse ? o.full_passes : o.coarsest_passes;
     for (int p = 0; p < passes; ++p) {
       std::vector<Color> next = col;
-      run_pass(all, nullptr, next, nullptr);
+      std::vector<int> next_src = src;
+      run_pass(all, nullptr, next, next_src, nullptr);
       col.swap(next);
+      src.swap(next_src);
     }
     if (l == 0) {
       // Quality: the final neighbourhoods against their best matches.
       std::vector<Color> scratch = col;
+      std::vector<int> scratch_src = src;
       std::vector<double> errors(groups, 0.0);
-      run_pass(all, nullptr, scratch, &errors);
+      run_pass(all, nullptr, scratch, scratch_src, &errors);
       double sum = 0;
       long long count = 0;
       for (int gi = 0; gi < groups; ++gi)

@@ -23,16 +23,21 @@ struct SynthOptions {
   /// Exemplar pixels per unit of surface length. 0: the exemplar's width spans a tenth of the
   /// mesh's bounding-box diagonal.
   double scale = 0;
+  /// When > 0, overrides `scale`: exemplar pixels per texel of the finest level, i.e. the
+  /// scale that shows the exemplar at this many of its pixels per finest sample.
+  double pixels_per_texel = 0;
   /// Direction of the exemplar's x axis on the surface. Zero: a smooth tangent field computed
   /// on the mesh (the x axis projected into each tangent plane, then relaxed).
   isochart::Vec3d direction{0, 0, 0};
   int neighborhood = 5;         ///< odd side of the current-level square neighbourhood (≥ 3)
   int coarse_neighborhood = 3;  ///< odd side of the coarser-level square (≥ 1)
-  /// Batches of the first pass at each level: a batch sees the samples of earlier batches as
-  /// synthesized (Wei–Levoy's "already synthesized"), and is matched in parallel.
-  int causal_batches = 8;
+  /// The first pass at each level visits the samples in a random order, each seeing the
+  /// coarser level and the samples visited before it (Wei–Levoy 2001). 0: one sample at a time
+  /// (sequential, the method as published); N > 0: N batches matched in parallel, a batch
+  /// seeing earlier batches (faster, but coarse patterns grow less well).
+  int causal_batches = 0;
   int full_passes = 1;      ///< full non-causal passes after the first pass, per level
-  int coarsest_passes = 3;  ///< full passes on the coarsest level after its random start
+  int coarsest_passes = 1;  ///< full passes on the coarsest level after its first pass
   int candidates = 8;       ///< FLANN candidates re-ranked exactly
   int pca_dims = 24;        ///< PCA dimensions of the kd-tree (≤ neighbourhood dimensions)
   int relax_iterations = 30;///< smoothing sweeps of the computed direction field
@@ -122,6 +127,9 @@ class LevelGeometry {
   /// Unit tangent t1, t2 and normal of sample s.
   isochart::Vec3d t1(int s) const;
   isochart::Vec3d t2(int s) const;
+  /// ∂position/∂x and ∂position/∂y at sample s (model units per texel).
+  isochart::Vec3d dpdx(int s) const;
+  isochart::Vec3d dpdy(int s) const;
   /// Local texel size at s: sqrt(|∂p/∂x × ∂p/∂y|) (model units).
   double texel_size(int s) const;
   /// Position where a tap lands (its weights applied to sample positions).
