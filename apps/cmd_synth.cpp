@@ -141,7 +141,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   for (int lv : a.levels) t << " " << lv;
   t << "\n  seam error " << r.seam_error << ", match error " << r.match_error << ", texel-scale spread "
     << r.texel_scale_spread << "\n  wrote " << stem << ".glb/.obj/.png and " << stem << "_mcgim.glb/.obj/.png in "
-    << j["seconds"].get<double>() << " s";
+    << j["seconds"].get<double>() << " s\n";
   ctx.emit(j, t.str());
 }
 
@@ -194,7 +194,7 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
   gen->callback([&ctx, ex, size, &action] {
     action = [&ctx, ex, size] {
       isochart::write_image(ex->second, synth::make_exemplar(ex->first, *size, ctx.opts.seed));
-      ctx.emit({{"exemplar", ex->first}, {"output", ex->second}, {"size", *size}}, "wrote " + ex->second);
+      ctx.emit({{"exemplar", ex->first}, {"output", ex->second}, {"size", *size}}, "wrote " + ex->second + "\n");
     };
   });
 }

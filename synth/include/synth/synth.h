@@ -39,8 +39,8 @@ struct SynthOptions {
   int full_passes = 1;      ///< full non-causal passes after the first pass, per level
   int coarsest_passes = 1;  ///< full passes on the coarsest level after its first pass
   int candidates = 8;       ///< FLANN candidates re-ranked exactly
-  int pca_dims = 24;        ///< PCA dimensions of the kd-tree (≤ neighbourhood dimensions)
-  int relax_iterations = 30;///< smoothing sweeps of the computed direction field
+  int pca_dims = 12;        ///< PCA dimensions of the kd-trees (more: better candidates, slower)
+  int relax_iterations = 200;///< smoothing sweeps of the computed direction field
   std::uint64_t seed = 1;   ///< every random choice; output independent of the thread count
 };
 
