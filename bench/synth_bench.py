@@ -7,7 +7,7 @@ and prints a markdown table (seam error, match error, texel-scale spread, second
 Usage: bench/synth_bench.py [--cli build/apps/isocharts] [--data ../shared/data]
                             [--out bench_out/synth] [--threads 2] [--pixels-per-texel 1.0]
                             [--renders DIR] [--only MESH ...] [--skip-determinism]
-The JSON of every run is kept in --out; renders (1200x300 PNG, four views of the mesh on its
+The JSON of every run is kept in --out; renders (1000x250 PNG, four views of the mesh on its
 iso-chart atlas) go to --renders (default: --out). Python 3 standard library only.
 """
 
@@ -64,7 +64,7 @@ def main():
             stem = out[: -len(".glb")]
             render = os.path.join(renders, "%s_%s.png" % (mesh_name, ex_name))
             subprocess.run([a.cli, "render", stem + ".obj", "--texture", stem + ".png", "--views", "4",
-                            "--width", "1200", "--height", "300", "-o", render, "-q"], check=True,
+                            "--width", "1000", "--height", "250", "-o", render, "-q"], check=True,
                            capture_output=True)
             rows.append((mesh_name, ex_name, j, wall, render))
             print("%s %s: %.1f s" % (mesh_name, ex_name, wall), file=sys.stderr)
@@ -75,7 +75,9 @@ def main():
         ex = os.path.join(a.data, "exemplars", "cells_161.jpg")
         outs = []
         for t in (1, 2):
-            out = os.path.join(a.out, "det_t%d.glb" % t)
+            # Same file names in two folders: the OBJ names its MTL.
+            os.makedirs(os.path.join(a.out, "threads%d" % t), exist_ok=True)
+            out = os.path.join(a.out, "threads%d" % t, "det.glb")
             synth(a.cli, mesh, ex, out, t, a.pixels_per_texel, seed=5)
             outs.append(out[: -len(".glb")])
         same = all(filecmp.cmp(outs[0] + s, outs[1] + s, shallow=False)
