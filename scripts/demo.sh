@@ -3,16 +3,22 @@
 # built-in creature (no input file needed). Outputs go to out/ (or OUT_DIR).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-./scripts/install-deps.sh
-./scripts/build.sh
+[ "${ISOCHARTS_DEMO_NO_BUILD:-0}" = 1 ] || ./scripts/install-deps.sh
+[ "${ISOCHARTS_DEMO_NO_BUILD:-0}" = 1 ] || ./scripts/build.sh
 out=${OUT_DIR:-out}
 mkdir -p "$out"
 bin=build/apps/isocharts
 mesh=${1:-builtin:creature}
+name=$(basename "${mesh#builtin:}")
+name=${name%.*}
 echo "== atlas: $mesh"
-"$bin" atlas "$mesh" -o "$out/creature_atlas.obj" -o "$out/creature_atlas.glb" --png "$out/creature_atlas.png" \
-  --report "$out/creature_atlas.json"
-"$bin" render "$out/creature_atlas.obj" --charts -o "$out/creature_charts.png" --views 4
+"$bin" atlas "$mesh" -o "$out/${name}_atlas.obj" -o "$out/${name}_atlas.glb" --png "$out/${name}_atlas.png" \
+  --report "$out/${name}_atlas.json"
+"$bin" render "$out/${name}_atlas.obj" --charts -o "$out/${name}_charts.png" --views 4
+echo "== remesh: multi-chart geometry image pyramid of the same atlas"
+"$bin" remesh "$out/${name}_atlas.obj" --atlas "$out/${name}_atlas.obj" -o "$out/${name}_remesh.ply" \
+  --levels 256,128,64,32 --png "$out/${name}_gim" --exr "$out/${name}_gim" --report "$out/${name}_remesh.json"
+"$bin" render "$out/${name}_remesh_64.ply" --wireframe -o "$out/${name}_remesh_64.png" --views 4
 echo
 echo "Outputs in $out/:"
 ls -1 "$out"

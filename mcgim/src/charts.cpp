@@ -475,7 +475,8 @@ AtlasCharts prepare_atlas(const Mesh& m) {
   return a;
 }
 
-Placement place_charts(const AtlasCharts& a, const LevelOptions& o, const isochart::Progress& progress) {
+Placement place_charts(const AtlasCharts& a, const LevelOptions& o, const std::vector<double>& area_scale,
+                       const isochart::Progress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
   Placement pl;
   pl.width = o.width;
@@ -494,7 +495,7 @@ Placement place_charts(const AtlasCharts& a, const LevelOptions& o, const isocha
       if (ch.area_uv < 0)
         for (Vec2d& uv : pack[c].uv) uv.x = -uv.x;
       pack[c].faces = ch.local_faces;
-      pack[c].area_3d = ch.area_3d;
+      pack[c].area_3d = ch.area_3d * (area_scale.empty() ? 1.0 : area_scale[c]);
     }
     isochart::PackOptions po;
     po.width = o.width;

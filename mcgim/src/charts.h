@@ -83,6 +83,7 @@ struct Placement {
 
 // Re-packs (options.repack) or keeps the atlas layout for a W×H image.
 Placement place_charts(const AtlasCharts& atlas, const LevelOptions& options,
+                       const std::vector<double>& area_scale,
                        const isochart::Progress& progress);
 
 // Position, normal and a face/barycentric location of the point at arc length t on a path.

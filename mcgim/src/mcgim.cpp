@@ -33,7 +33,8 @@ void check_options(const LevelOptions& o) {
   if (!(o.optimize_regularization > 0)) bad("optimize_regularization must be > 0");
 }
 
-Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const isochart::Progress& progress) {
+Level build_once(const detail::AtlasCharts& a, const LevelOptions& o, const std::vector<double>& area_scale,
+                 std::vector<char>& strained, const isochart::Progress& progress) {
   Level lv;
   LevelStats& st = lv.stats;
   st.width = o.width;
@@ -43,7 +44,7 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
   st.input_euler_characteristic = a.input_euler;
   st.input_boundary_loops = a.input_boundary_loops;
 
-  const detail::Placement pl = detail::place_charts(a, o, progress);
+  const detail::Placement pl = detail::place_charts(a, o, area_scale, progress);
   st.seconds_packing = pl.seconds;
 
   auto t0 = Clock::now();
@@ -55,6 +56,7 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
   st.seconds_zippering = since(t0);
   st.cut_paths = zs.cut_paths;
   st.empty_charts = zs.empty_charts;
+  strained = zs.strained;
   st.removed_samples = sm.removed;
   st.forced_samples = sm.forced;
 
@@ -76,6 +78,61 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
   st.topology = check_topology(lv.remesh.mesh);
   st.texel_size = st.defined_samples > 0 ? std::sqrt(a.surface_area / st.defined_samples) : 0.0;
   return lv;
+}
+
+// How far a remesh is from the input's topology; 0 when it is kept.
+int topology_error(const LevelStats& st) {
+  const TopologyCheck& t = st.topology;
+  return t.nonmanifold_edges + t.nonmanifold_vertices +
+         std::abs(t.euler_characteristic - st.input_euler_characteristic) +
+         std::abs(t.boundary_loops - st.input_boundary_loops);
+}
+
+// At coarse resolutions a chart of a few texels may cover no triangle of samples and is
+// contracted, which can pinch the remesh. Charts with fewer samples than a small disk needs are
+// then packed larger (their density no longer matches the others, which matters less than a
+// remesh with the wrong topology) until the topology is kept or the attempts run out.
+Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const isochart::Progress& progress) {
+  constexpr int kMinSamples = 12;
+  constexpr int kAttempts = 6;
+  const int nc = static_cast<int>(a.charts.size());
+  auto work_seconds = [](const LevelStats& st) {
+    return st.seconds_packing + st.seconds_sampling + st.seconds_zippering + st.seconds_reconstruction +
+           st.seconds_optimization;
+  };
+  std::vector<double> scale;
+  std::vector<char> strained;
+  Level best = build_once(a, o, scale, strained, progress);
+  int best_error = topology_error(best.stats);
+  double spent = work_seconds(best.stats);
+  std::vector<long long> count(nc, 0);
+  for (int c : best.image.chart)
+    if (c >= 0) ++count[c];
+  for (int attempt = 1; attempt < kAttempts && o.repack && best_error > 0; ++attempt) {
+    if (scale.empty()) scale.assign(nc, 1.0);
+    int enlarged = 0;
+    for (int c = 0; c < nc; ++c)
+      if (count[c] < kMinSamples || strained[c]) {
+        scale[c] *= 4.0;
+        ++enlarged;
+      }
+    if (enlarged == 0) break;
+    Level retry = build_once(a, o, scale, strained, progress);
+    spent += work_seconds(retry.stats);
+    retry.stats.enlarged_charts =
+        static_cast<int>(std::count_if(scale.begin(), scale.end(), [](double x) { return x > 1.0; }));
+    count.assign(nc, 0);
+    for (int c : retry.image.chart)
+      if (c >= 0) ++count[c];
+    const int error = topology_error(retry.stats);
+    if (error < best_error) {
+      best_error = error;
+      best = std::move(retry);
+    }
+  }
+  // Every attempt's time counts, as packing (the attempts differ in their packing).
+  best.stats.seconds_packing += spent - work_seconds(best.stats);
+  return best;
 }
 
 }  // namespace
@@ -132,7 +189,7 @@ ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target
   auto trial = [&](int res) {
     o.width = o.height = res;
     check_options(o);
-    const detail::Placement pl = detail::place_charts(a, o, progress);
+    const detail::Placement pl = detail::place_charts(a, o, {}, progress);
     const long long n = detail::count_covered(a, pl);
     ++best.trials;
     if (best.width == 0 || std::llabs(n - target) < std::llabs(best.defined_samples - target) ||

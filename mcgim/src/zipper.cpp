@@ -518,8 +518,24 @@ ZipperStats zipper(const AtlasCharts& a, const Placement& pl, Sampling& sm,
     }
     if (!emptied) break;
   }
+  st.strained.assign(nc, 0);
   for (int c = 0; c < nc; ++c)
-    if (sm.regions[c].ring.empty()) ++st.empty_charts;
+    if (sm.regions[c].ring.empty()) {
+      ++st.empty_charts;
+      st.strained[c] = 1;
+    }
+  for (const CutPath& p : a.paths) {
+    if (p.vertices.front() == p.vertices.back()) continue;  // a closed loop has one node
+    if (uf.find(N + p.vertices.front()) != uf.find(N + p.vertices.back())) continue;
+    // The side with fewer samples is the one too coarse to carry the path.
+    int worst = -1;
+    for (int sid : {p.side_a, p.side_b}) {
+      if (sid < 0) continue;
+      const int c = a.sides[sid].chart;
+      if (worst < 0 || sm.regions[c].samples.size() < sm.regions[worst].samples.size()) worst = c;
+    }
+    if (worst >= 0) st.strained[worst] = 1;
+  }
   isochart::report(progress, isochart::Stage::Zippering, 0.8);
 
   // Group positions: the mean of the nodes a group holds, else the path point at its mean t.

@@ -49,6 +49,10 @@ struct LevelStats {
   int width = 0, height = 0;
   int charts = 0;
   int empty_charts = 0;       ///< charts left without a sample at this resolution (contracted)
+  /// Charts packed larger than their surface area asks for: when a coarse level's remesh
+  /// loses the input's topology (charts too small for a triangle of samples collapse), the
+  /// level is rebuilt with its sparsest charts enlarged, a few times at most.
+  int enlarged_charts = 0;
   long long defined_samples = 0;
   long long removed_samples = 0;  ///< covered samples dropped to make each chart a disk
   /// Samples added to charts too small to cover a triangle of sample centres: one 2×2 block at
