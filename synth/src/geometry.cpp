@@ -38,6 +38,9 @@ struct LevelGeometry::Impl {
   // Bilinear lookup in `chart` at continuous image position xy; weights of corners outside the
   // chart are dropped. Returns the in-chart weight before renormalization.
   double bilinear(Vec2d xy, int chart, Tap& tap) const {
+    tap = Tap{};
+    // Far outside the image (or not a number): no sample; keeps the int conversions defined.
+    if (!(std::fabs(xy.x) < 1e6 && std::fabs(xy.y) < 1e6)) return 0;
     const double fx = xy.x - 0.5, fy = xy.y - 0.5;
     const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
     const double ax = fx - x0, ay = fy - y0;

@@ -670,6 +670,7 @@ Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, 
         const Vec2d uv{p.x / size, p.y / size};
         const Eigen::Vector3d a(uv.x, uv.y, 1);
         const Eigen::Vector2d xy = affine[c].transpose() * a;
+        if (!(std::fabs(xy.x()) < 1e6 && std::fabs(xy.y()) < 1e6)) continue;
         // Bilinear over the chart's samples, renormalized where the footprint leaves it.
         const double fx = xy.x() - 0.5, fy = xy.y() - 0.5;
         const int ix = static_cast<int>(std::floor(fx)), iy = static_cast<int>(std::floor(fy));
