@@ -1,10 +1,12 @@
 #pragma once
 /// Surface texture synthesis over an MCGIM pyramid (Iso-charts §8; Wei & Levoy 2001):
 /// neighbourhoods are gathered in each chart's 2-D image domain, rotated and scaled by a smooth
-/// tangent direction field, and cross chart seams through the surface; every level is grown
-/// from the next coarser one through the normal-shooting correspondence, with a pass over
-/// already-synthesized samples and a full non-causal pass, matching with FLANN on
-/// PCA-reduced neighbourhoods and exact re-ranking.
+/// tangent direction field, and cross chart seams by walking over the surface into the
+/// neighbour chart. The coarsest level starts from exemplar copies laid out by the field; each
+/// finer level is upsampled from the next coarser one through the normal-shooting
+/// correspondence, then gets a first pass in random order (coarser level plus the samples
+/// already synthesized) and full non-causal passes. Candidates come from FLANN kd-trees on
+/// PCA-reduced neighbourhoods plus Ashikhmin-style coherent candidates, re-ranked exactly.
 
 #include <array>
 #include <cstdint>
