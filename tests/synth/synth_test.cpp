@@ -252,3 +252,43 @@ TEST_CASE("isocharts synth writes textured meshes and its report", "[synth][cli]
   CHECK(tmp.run("exemplar bricks --size 32 -o " + tmp / "b.png") == 0);
   CHECK(isochart::read_image(tmp / "b.png").width == 32);
 }
+
+TEST_CASE("a tap off the mesh boundary is dropped", "[synth]") {
+  // A flat unit square, one chart: taps that leave it have nowhere to go.
+  isochart::Mesh m;
+  const int n = 8;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      m.positions.push_back({double(i) / n, double(j) / n, 0});
+      m.uvs.push_back({0.05 + 0.9 * i / n, 0.05 + 0.9 * j / n});
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      m.faces.push_back({a, b, c});
+      m.faces.push_back({a, c, d});
+      m.face_uvs.push_back({a, b, c});
+      m.face_uvs.push_back({a, c, d});
+      m.face_groups.push_back(0);
+      m.face_groups.push_back(0);
+    }
+  mcgim::LevelOptions lo;
+  lo.width = lo.height = 32;
+  lo.optimize = false;
+  const mcgim::Level level = mcgim::build_level(m, lo);
+  const mcgim::GeometryImage& g = level.image;
+  const synth::LevelGeometry geo(level, std::vector<Vec3d>(g.width * g.height, Vec3d{1, 0, 0}));
+  const double texel = level.stats.texel_size;
+  int edge = 0;
+  for (int s = 0; s < g.width * g.height; ++s) {
+    if (!g.defined(s) || g.positions[s].x < 1 - texel || std::fabs(g.positions[s].y - 0.5) > 0.3) continue;
+    ++edge;
+    CHECK_FALSE(geo.locate(s, 3 * texel, 0).valid());  // beyond x = 1
+    const synth::Tap inward = geo.locate(s, -3 * texel, 0);
+    REQUIRE(inward.valid());
+    // Boundary samples sit on the boundary edge (not on the grid), so the one-sided Jacobian
+    // there is off by up to half a texel.
+    CHECK(geo.position(inward).x == Approx(g.positions[s].x - 3 * texel).margin(0.6 * texel));
+  }
+  CHECK(edge > 0);
+}
