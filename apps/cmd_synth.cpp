@@ -168,7 +168,7 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--direction", args->direction, "Exemplar x axis on the surface, x,y,z (default: smooth field)")
       ->delimiter(',');
-  sub->add_option("--levels", args->levels, "MCGIM pyramid resolutions, finest first (default 256,128,64,32)")
+  sub->add_option("--levels", args->levels, "MCGIM pyramid resolutions, any order (default 256,128,64,32)")
       ->delimiter(',')
       ->check(CLI::Range(8, 4096));
   sub->add_option("--neighborhood", args->neighborhood, "Side of the current-level neighbourhood (odd, default 5)")
