@@ -249,7 +249,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     throw isochart::InputError("", "neighborhood must be odd and at least 3");
   if (o.coarse_neighborhood < 1 || o.coarse_neighborhood % 2 == 0)
     throw isochart::InputError("", "coarse neighborhood must be odd and at least 1");
-  if (o.causal_batches < 0 || o.full_passes < 0 || o.coarsest_passes < 0 || o.candidates < 1 || o.pca_dims < 1)
+  if (o.first_pass_batch < 1 || o.full_passes < 0 || o.coarsest_passes < 0 || o.candidates < 1 || o.pca_dims < 1)
     throw isochart::InputError("", "synthesis passes, batches, candidates and PCA dimensions must be positive");
   if (!(o.scale >= 0) || !std::isfinite(o.scale)) throw isochart::InputError("", "scale must be positive");
   if (exemplar.channels != 3 || exemplar.width < 4 || exemplar.height < 4)
@@ -458,8 +458,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
                             gather(gi, col, done, q.data(), valid);
                             if (std::none_of(valid.begin(), valid.end(), [](char c) { return c != 0; })) continue;
                             coherent(gi, src, done, coh);
-                            const Match mt = best_match(matcher, done && has_coarse ? matcher.coarse : matcher.full,
-                                                        q.data(), valid, o.candidates, coh);
+                            const Match mt = best_match(matcher, matcher.full, q.data(), valid, o.candidates, coh);
                             if (mt.pixel < 0) continue;
                             set_pixel(out, out_src, gi, mt.pixel);
                             if (errors) (*errors)[gi] = mt.error;
@@ -474,39 +473,35 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
       isochart::Rng rng(isochart::mix_seed(o.seed, 1000u + static_cast<std::uint64_t>(l)));
       for (int i = groups - 1; i > 0; --i) std::swap(order[i], order[rng.below(static_cast<std::uint64_t>(i) + 1)]);
       std::vector<char> done(groups, 0);
-      if (o.causal_batches == 0) {
-        // Wei–Levoy's order exactly: one sample at a time, each seeing all earlier ones.
-        std::vector<float> q(matcher.dim);
-        std::vector<char> valid(per);
-        std::vector<int> coh;
-        for (int i = 0; i < groups; ++i) {
-          const int gi = order[i];
-          if (reps[l][gi] >= 0) {
+      // Batches of consecutive samples in that order are matched in parallel, each seeing the
+      // batches before it: with a batch far smaller than the level, almost no two samples of
+      // one batch are neighbours, so this is Wei–Levoy's sequential order in effect.
+      const int batch = std::max(1, o.first_pass_batch);
+      std::vector<int> picked(batch);
+      for (int start = 0; start < groups; start += batch) {
+        const int count = std::min(batch, groups - start);
+        tbb::parallel_for(tbb::blocked_range<int>(0, count, 8), [&](const tbb::blocked_range<int>& range) {
+          std::vector<float> q(matcher.dim);
+          std::vector<char> valid(per);
+          std::vector<int> coh;
+          for (int i = range.begin(); i < range.end(); ++i) {
+            const int gi = order[start + i];
+            picked[i] = -1;
+            if (reps[l][gi] < 0) continue;
             gather(gi, col, &done, q.data(), valid);
-            if (std::any_of(valid.begin(), valid.end(), [](char c) { return c != 0; })) {
-              coherent(gi, src, &done, coh);
-              const Match mt = best_match(matcher, matcher.coarse, q.data(), valid, o.candidates, coh);
-              if (mt.pixel >= 0) set_pixel(col, src, gi, mt.pixel);
-            }
+            if (std::none_of(valid.begin(), valid.end(), [](char c) { return c != 0; })) continue;
+            coherent(gi, src, &done, coh);
+            picked[i] = best_match(matcher, matcher.coarse, q.data(), valid, o.candidates, coh).pixel;
           }
+        });
+        for (int i = 0; i < count; ++i) {
+          const int gi = order[start + i];
+          if (picked[i] >= 0) set_pixel(col, src, gi, picked[i]);
           done[gi] = 1;
-          if ((i & 4095) == 0)
-            isochart::report(progress, isochart::Stage::Synthesis,
-                             0.05 + 0.9 * ((nl - 1 - l) + 0.5 * i / double(groups)) / nl);
         }
-      }
-      const int nb = o.causal_batches == 0 ? 0 : std::min(o.causal_batches, std::max(1, groups));
-      for (int b = 0; b < nb; ++b) {
-        const std::vector<int> batch(order.begin() + static_cast<long>(groups) * b / nb,
-                                     order.begin() + static_cast<long>(groups) * (b + 1) / nb);
-        std::vector<Color> next = col;
-        std::vector<int> next_src = src;
-        run_pass(batch, &done, next, next_src, nullptr);
-        col.swap(next);
-        src.swap(next_src);
-        for (int gi : batch) done[gi] = 1;
-        isochart::report(progress, isochart::Stage::Synthesis,
-                         0.05 + 0.9 * ((nl - 1 - l) + 0.5 * (b + 1) / nb) / nl);
+        if ((start / batch) % 64 == 0)
+          isochart::report(progress, isochart::Stage::Synthesis,
+                           0.05 + 0.9 * ((nl - 1 - l) + 0.5 * start / double(groups)) / nl);
       }
     }
     const int passes = has_coarse ? o.full_passes : o.coarsest_passes;

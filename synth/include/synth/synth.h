@@ -34,10 +34,10 @@ struct SynthOptions {
   int neighborhood = 5;         ///< odd side of the current-level square neighbourhood (≥ 3)
   int coarse_neighborhood = 3;  ///< odd side of the coarser-level square (≥ 1)
   /// The first pass at each level visits the samples in a random order, each seeing the
-  /// coarser level and the samples visited before it (Wei–Levoy 2001). 0: one sample at a time
-  /// (sequential, the method as published); N > 0: N batches matched in parallel, a batch
-  /// seeing earlier batches (faster, but coarse patterns grow less well).
-  int causal_batches = 0;
+  /// coarser level and the samples visited before it (Wei–Levoy 2001). Samples are matched
+  /// in batches of this many consecutive ones, in parallel, a batch seeing the batches before
+  /// it: 1 is the published sequential order; small batches (≪ samples) give the same quality.
+  int first_pass_batch = 64;
   int full_passes = 1;      ///< full non-causal passes after the first pass, per level
   int coarsest_passes = 1;  ///< full passes on the coarsest level after its first pass
   int candidates = 8;       ///< FLANN candidates re-ranked exactly
