@@ -1,0 +1,202 @@
+// `isocharts synth IN --exemplar IMG -o OUT.glb`: grows a texture from an exemplar over the
+// surface (iso-chart atlas → MCGIM pyramid → multiresolution synthesis) and writes the textured
+// MCGIM remesh and the original mesh with its atlas and the transferred texture.
+// `isocharts exemplar NAME -o FILE.png` (hidden): writes one of the procedural exemplars.
+
+#include <cmath>
+#include <sstream>
+
+#include "cli.h"
+#include "isochart/atlas.h"
+#include "isochart/builtin.h"
+#include "isochart/error.h"
+#include "isochart/image.h"
+#include "mcgim/mcgim.h"
+#include "synth/exemplar.h"
+#include "synth/synth.h"
+
+namespace cli {
+
+namespace {
+
+struct SynthArgs {
+  std::string input;
+  std::string output;
+  std::string exemplar = "builtin:bricks";
+  double scale = 0;
+  double pixels_per_texel = 0;
+  std::vector<double> direction;
+  std::vector<int> levels = {256, 128, 64, 32};
+  int neighborhood = 5;
+  int coarse_neighborhood = 3;
+  int full_passes = 1;
+  int atlas_size = 1024;
+};
+
+nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
+
+std::string stem_of(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  const auto dot = path.find_last_of('.');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return path;
+  return path.substr(0, dot);
+}
+
+std::string base_name(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  return slash == std::string::npos ? path : path.substr(slash + 1);
+}
+
+void run_synth(const Context& ctx, const SynthArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const isochart::MeshFormat fmt = isochart::format_from_path(a.output);
+  if (fmt != isochart::MeshFormat::Glb && fmt != isochart::MeshFormat::Obj)
+    throw isochart::InputError(a.output, "synth writes .glb or .obj (both are written, with PNG textures)");
+  if (!a.direction.empty() && a.direction.size() != 3) bad_option("--direction takes three numbers x,y,z");
+  const isochart::Image exemplar = synth::exemplar_from(a.exemplar);
+
+  const std::string prefix = "builtin:";
+  const isochart::Mesh input = a.input.rfind(prefix, 0) == 0 ? isochart::make_builtin(a.input.substr(prefix.size()))
+                                                             : ctx.load(a.input).mesh;
+  const auto ta = std::chrono::steady_clock::now();
+  isochart::AtlasOptions ao;
+  ao.seed = ctx.opts.seed;
+  const isochart::Atlas built = isochart::build_atlas(input, ao, ctx.progress());
+  const isochart::Mesh atlas = built.apply_to(input);
+  const double seconds_atlas = seconds_since(ta);
+
+  const auto tp = std::chrono::steady_clock::now();
+  mcgim::PyramidOptions po;
+  po.sizes.clear();
+  for (int r : a.levels) po.sizes.push_back({r, r});
+  std::vector<mcgim::Level> pyramid;
+  try {
+    pyramid = mcgim::build_pyramid(atlas, po, ctx.progress());
+  } catch (const isochart::InputError& e) {
+    if (!e.file().empty()) throw;
+    throw isochart::InputError(a.input, e.what());
+  }
+  const double seconds_pyramid = seconds_since(tp);
+
+  synth::SynthOptions so;
+  so.scale = a.scale;
+  so.pixels_per_texel = a.pixels_per_texel;
+  if (a.scale > 0 && a.pixels_per_texel > 0) bad_option("--scale and --pixels-per-texel are exclusive");
+  if (!a.direction.empty()) so.direction = {a.direction[0], a.direction[1], a.direction[2]};
+  so.neighborhood = a.neighborhood;
+  so.coarse_neighborhood = a.coarse_neighborhood;
+  so.full_passes = a.full_passes;
+  so.seed = ctx.opts.seed;
+  const synth::SynthResult r = synth::synthesize(atlas, pyramid, exemplar, so, ctx.progress());
+
+  const auto tt = std::chrono::steady_clock::now();
+  const isochart::Image atlas_tex = synth::transfer_to_atlas(atlas, pyramid[0], r.texture, a.atlas_size);
+  const double seconds_transfer = seconds_since(tt);
+
+  // Outputs: STEM.{glb,obj,png} (the input mesh on its atlas) and STEM_mcgim.{glb,obj,png}.
+  const auto tw = std::chrono::steady_clock::now();
+  const std::string stem = stem_of(a.output);
+  const std::string atlas_png = stem + ".png", gim_png = stem + "_mcgim.png";
+  isochart::write_image(atlas_png, atlas_tex);
+  isochart::write_image(gim_png, r.texture);
+  isochart::SaveOptions so_glb, so_obj;
+  so_glb.texture = atlas_png;
+  so_obj.texture = base_name(atlas_png);
+  isochart::save_mesh(atlas, stem + ".glb", so_glb);
+  isochart::save_mesh(atlas, stem + ".obj", so_obj);
+  so_glb.texture = gim_png;
+  so_obj.texture = base_name(gim_png);
+  isochart::save_mesh(pyramid[0].remesh.mesh, stem + "_mcgim.glb", so_glb);
+  isochart::save_mesh(pyramid[0].remesh.mesh, stem + "_mcgim.obj", so_obj);
+  const double seconds_output = seconds_since(tw);
+  ctx.end_progress();
+
+  nlohmann::json j;
+  j["input"] = a.input;
+  j["exemplar"] = a.exemplar;
+  j["outputs"] = {stem + ".glb", stem + ".obj", atlas_png, stem + "_mcgim.glb", stem + "_mcgim.obj", gim_png};
+  j["scale"] = r.scale;
+  j["charts"] = built.num_charts();
+  j["seam_error"] = finite_or_null(r.seam_error);
+  j["seam_pairs"] = r.seam_pairs;
+  j["match_error"] = r.match_error;
+  j["texel_scale_spread"] = r.texel_scale_spread;
+  nlohmann::json jl = nlohmann::json::array();
+  for (const auto& l : r.levels)
+    jl.push_back({{"resolution", {l.width, l.height}},
+                  {"exemplar", {l.exemplar_width, l.exemplar_height}},
+                  {"texel_size", l.texel_size},
+                  {"exemplar_pixels_per_texel", l.exemplar_factor},
+                  {"samples", l.groups},
+                  {"seam_taps", l.seam_taps},
+                  {"missing_taps", l.missing_taps},
+                  {"seconds", l.seconds}});
+  j["levels"] = jl;
+  j["seconds_breakdown"] = {{"atlas", seconds_atlas},   {"pyramid", seconds_pyramid},
+                            {"synthesis", r.seconds},   {"transfer", seconds_transfer},
+                            {"output", seconds_output}};
+  j["seconds"] = seconds_since(t0);
+  std::ostringstream t;
+  t << a.input << " with " << a.exemplar << ": " << built.num_charts() << " charts, levels";
+  for (int lv : a.levels) t << " " << lv;
+  t << "\n  seam error " << r.seam_error << ", match error " << r.match_error << ", texel-scale spread "
+    << r.texel_scale_spread << "\n  wrote " << stem << ".glb/.obj/.png and " << stem << "_mcgim.glb/.obj/.png in "
+    << j["seconds"].get<double>() << " s\n";
+  ctx.emit(j, t.str());
+}
+
+}  // namespace
+
+void add_synth(CLI::App& app, Context& ctx, Action& action) {
+  auto args = std::make_shared<SynthArgs>();
+  CLI::App* sub = app.add_subcommand("synth", "Grow a texture from an exemplar image over the surface");
+  sub->add_option("input", args->input, "Mesh file (OBJ/OFF/PLY/glTF) or builtin:NAME")->required();
+  sub->add_option("-o,--output", args->output,
+                  "OUT.glb or OUT.obj: writes OUT.glb, OUT.obj+mtl, OUT.png (the mesh on its iso-chart atlas) "
+                  "and OUT_mcgim.glb/.obj/.png (the textured geometry-image remesh)")
+      ->required();
+  sub->add_option("--exemplar", args->exemplar,
+                  "Exemplar image (PNG/JPG/EXR: RGB, opaque RGBA or grey) or builtin:bricks|cells|weave|noise "
+                  "(default builtin:bricks)");
+  sub->add_option("--scale", args->scale,
+                  "Exemplar pixels per unit of surface length (default: the exemplar spans a tenth of the "
+                  "bounding-box diagonal)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--pixels-per-texel", args->pixels_per_texel,
+                  "Instead of --scale: exemplar pixels per texel of the finest level (1 = the exemplar at "
+                  "full resolution)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--direction", args->direction, "Exemplar x axis on the surface, x,y,z (default: smooth field)")
+      ->delimiter(',');
+  sub->add_option("--levels", args->levels, "MCGIM pyramid resolutions, any order (default 256,128,64,32)")
+      ->delimiter(',')
+      ->check(CLI::Range(8, 4096));
+  sub->add_option("--neighborhood", args->neighborhood, "Side of the current-level neighbourhood (odd, default 5)")
+      ->check(CLI::Range(3, 15));
+  sub->add_option("--coarse-neighborhood", args->coarse_neighborhood,
+                  "Side of the coarser-level neighbourhood (odd, default 3)")
+      ->check(CLI::Range(1, 15));
+  sub->add_option("--passes", args->full_passes, "Full non-causal passes per level (default 1)")
+      ->check(CLI::Range(0, 10));
+  sub->add_option("--atlas-size", args->atlas_size, "Texture size of the atlas output (default 1024)")
+      ->check(CLI::Range(16, 8192));
+  sub->footer("Example:\n  isocharts synth builtin:creature -o creature.glb && "
+              "isocharts render creature.glb --texture creature.png --views 4 -o creature_views.png");
+  sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_synth(ctx, *args); }; });
+
+  auto ex = std::make_shared<std::pair<std::string, std::string>>();
+  auto size = std::make_shared<int>(128);
+  CLI::App* gen = app.add_subcommand("exemplar", "Write a procedural exemplar texture");
+  gen->group("");  // hidden: a tool for exemplars/
+  gen->add_option("name", ex->first, "bricks, cells, weave or noise")->required();
+  gen->add_option("-o,--output", ex->second, "Image file (.png)")->required();
+  gen->add_option("--size", *size, "Side in pixels (default 128)")->check(CLI::Range(8, 4096));
+  gen->callback([&ctx, ex, size, &action] {
+    action = [&ctx, ex, size] {
+      isochart::write_image(ex->second, synth::make_exemplar(ex->first, *size, ctx.opts.seed));
+      ctx.emit({{"exemplar", ex->first}, {"output", ex->second}, {"size", *size}}, "wrote " + ex->second + "\n");
+    };
+  });
+}
+
+}  // namespace cli

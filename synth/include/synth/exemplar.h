@@ -1,0 +1,50 @@
+#pragma once
+/// Exemplar textures for surface synthesis: reading and checking them, resampling them to the
+/// texel size of each MCGIM level (the exemplar's Gaussian pyramid, Wei–Levoy 2001 §3), and the
+/// project's own procedural exemplars.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "isochart/image.h"
+
+namespace synth {
+
+/// Reads an exemplar through OpenImageIO (PNG, JPG, EXR, ...) and returns it as 3-channel RGB
+/// in [0, 1]: greyscale is replicated, an alpha channel must be opaque (every value ≥ 0.999)
+/// and is dropped; EXR values are clamped to [0, 1].
+/// \throw isochart::InputError(path, ...) for a missing or unreadable file, an image smaller
+///        than 4×4, transparency, or a channel count other than 1–4.
+isochart::Image load_exemplar(const std::string& path);
+
+/// Checks an in-memory exemplar the same way and converts it to RGB.
+/// \throw isochart::InputError(name, ...) as load_exemplar.
+isochart::Image to_rgb_exemplar(const isochart::Image& image, const std::string& name);
+
+/// The exemplar resampled so that one of its pixels covers `factor` pixels of the original
+/// (factor > 1 shrinks with a Gaussian pre-filter of σ = 0.5·factor pixels, factor ≤ 1
+/// magnifies bilinearly). The result is at least 4×4; `actual_factor` gives the original
+/// pixels per result pixel that its integer size implies (width-wise).
+struct ExemplarLevel {
+  isochart::Image image;      ///< RGB
+  double actual_factor = 1;   ///< original exemplar pixels per pixel of `image`
+};
+ExemplarLevel resample_exemplar(const isochart::Image& rgb, double factor);
+
+/// Builds one ExemplarLevel per factor (MCGIM levels finest first: increasing factors).
+std::vector<ExemplarLevel> exemplar_pyramid(const isochart::Image& rgb,
+                                            const std::vector<double>& factors);
+
+/// Names of the procedural exemplars: "bricks", "cells", "weave", "noise".
+std::vector<std::string> exemplar_names();
+
+/// A procedural exemplar, `size`×`size` RGB, depending only on name, size and seed. All are
+/// tileable (periodic over the image).
+/// \throw isochart::InputError("builtin:NAME", ...) for an unknown name or size < 8.
+isochart::Image make_exemplar(const std::string& name, int size = 128, std::uint64_t seed = 1);
+
+/// "builtin:NAME" → make_exemplar(NAME), anything else → load_exemplar(path).
+isochart::Image exemplar_from(const std::string& spec);
+
+}  // namespace synth

@@ -1,0 +1,145 @@
+#pragma once
+/// Surface texture synthesis over an MCGIM pyramid (Iso-charts §8; Wei & Levoy 2001):
+/// neighbourhoods are gathered in each chart's 2-D image domain, rotated and scaled by a smooth
+/// tangent direction field, and cross chart seams by walking over the surface into the
+/// neighbour chart. The coarsest level starts from exemplar copies laid out by the field; each
+/// finer level is upsampled from the next coarser one through the normal-shooting
+/// correspondence, then gets a first pass in random order (coarser level plus the samples
+/// already synthesized) and full non-causal passes. Candidates come from FLANN kd-trees on
+/// PCA-reduced neighbourhoods plus Ashikhmin-style coherent candidates, re-ranked exactly.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "isochart/image.h"
+#include "isochart/mesh.h"
+#include "isochart/progress.h"
+#include "isochart/vec.h"
+#include "mcgim/mcgim.h"
+
+namespace synth {
+
+struct SynthOptions {
+  /// Exemplar pixels per unit of surface length. 0: the exemplar's width spans a tenth of the
+  /// mesh's bounding-box diagonal.
+  double scale = 0;
+  /// When > 0, overrides `scale`: exemplar pixels per texel of the finest level, i.e. the
+  /// scale that shows the exemplar at this many of its pixels per finest sample.
+  double pixels_per_texel = 0;
+  /// Direction of the exemplar's x axis on the surface. Zero: a smooth tangent field computed
+  /// on the mesh (the x axis projected into each tangent plane, then relaxed).
+  isochart::Vec3d direction{0, 0, 0};
+  int neighborhood = 5;         ///< odd side of the current-level square neighbourhood (≥ 3)
+  int coarse_neighborhood = 3;  ///< odd side of the coarser-level square (≥ 1)
+  /// The first pass at each level visits the samples in a random order, each seeing the
+  /// coarser level and the samples visited before it (Wei–Levoy 2001). Samples are matched
+  /// in batches of this many consecutive ones, in parallel, a batch seeing the batches before
+  /// it: 1 is the published sequential order; small batches (≪ samples) give the same quality.
+  int first_pass_batch = 64;
+  int full_passes = 1;      ///< full non-causal passes after the first pass, per level
+  int coarsest_passes = 1;  ///< full passes on the coarsest level after its first pass
+  int candidates = 8;       ///< FLANN candidates re-ranked exactly
+  int pca_dims = 12;        ///< PCA dimensions of the kd-trees (more: better candidates, slower)
+  int relax_iterations = 200;///< smoothing sweeps of the computed direction field
+  std::uint64_t seed = 1;   ///< every random choice; output independent of the thread count
+};
+
+/// Per-level figures. Seconds are wall time.
+struct SynthLevelStats {
+  int width = 0, height = 0;
+  int exemplar_width = 0, exemplar_height = 0;  ///< exemplar pyramid level
+  double texel_size = 0;         ///< model units
+  double exemplar_factor = 0;    ///< original exemplar pixels per texel of this level
+  long long groups = 0;          ///< synthesized surface samples (zipper groups)
+  long long missing_taps = 0;    ///< taps dropped (off the mesh boundary)
+  long long seam_taps = 0;       ///< taps that crossed into another chart
+  double seconds = 0;
+};
+
+struct SynthResult {
+  /// The finest level's texture in the MCGIM layout, RGB, row 0 = top (the image file's
+  /// orientation), gutter filled with the nearest sample's colour.
+  isochart::Image texture;
+  /// Per level (finest first): colour of every zipper group, RGB in [0, 1].
+  std::vector<std::vector<std::array<float, 3>>> group_colors;
+  std::vector<SynthLevelStats> levels;
+  double scale = 0;  ///< exemplar pixels per unit of surface length actually used
+  /// Mean over finest-level samples of the squared distance between the final neighbourhood
+  /// and its best exemplar match, per valid component, divided by the exemplar's variance
+  /// (0 = every neighbourhood occurs in the exemplar; about 2 for unrelated noise).
+  double match_error = 0;
+  /// Mean colour difference between samples two texels apart across a zippered seam, divided
+  /// by the same figure for pairs inside charts (1 = seams invisible). 0 when both are 0
+  /// (a constant texture); +inf when only the interior one is 0.
+  double seam_error = 0;
+  long long seam_pairs = 0;
+  /// Standard deviation over finest-level samples of log(local texel size on the surface).
+  double texel_scale_spread = 0;
+  double seconds = 0;
+};
+
+/// Synthesizes a texture over `pyramid` (from mcgim::build_pyramid of `atlas`, finest first;
+/// one level is fine) from `exemplar` (RGB, see load_exemplar).
+/// \throw isochart::InputError for bad options or an empty pyramid; Cancelled via `progress`.
+SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Level>& pyramid,
+                       const isochart::Image& exemplar, const SynthOptions& options = {},
+                       const isochart::Progress& progress = {});
+
+/// Transfers a level's texture (RGB, in that level's layout, row 0 = top) onto the atlas's own
+/// texture coordinates: a `size`×`size` RGB image (row 0 = top) for `atlas`'s uvs. Each chart's
+/// MCGIM layout is an affine image of its atlas layout, fitted from the samples; texels outside
+/// every chart take the nearest covered texel's colour so that mipmaps do not bleed.
+isochart::Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level,
+                                  const isochart::Image& texture, int size);
+
+/// Per-vertex unit tangent directions of `mesh`: `direction` (or the x axis when zero, the
+/// y axis where x is nearly normal) projected into each tangent plane; when `direction` is
+/// zero, then relaxed by `iterations` sweeps of neighbour averaging.
+std::vector<isochart::Vec3d> direction_field(const isochart::Mesh& mesh,
+                                             const isochart::Vec3d& direction, int iterations);
+
+/// A neighbourhood tap: a weighted mix of up to four samples of one level (weights sum to 1),
+/// or missing (all weights 0) when it falls off the mesh boundary.
+struct Tap {
+  std::array<int, 4> sample{{-1, -1, -1, -1}};
+  std::array<float, 4> weight{{0, 0, 0, 0}};
+  bool crossed = false;  ///< found through the surface in another chart than the start
+  bool valid() const { return sample[0] >= 0; }
+};
+
+/// Local geometry of one level: per sample the tangent frame and the image-to-surface
+/// Jacobian, and a spatial hash for taps that leave their chart.
+class LevelGeometry {
+ public:
+  /// `directions`: W·H tangent directions (any length; projected and normalized per sample).
+  LevelGeometry(const mcgim::Level& level, const std::vector<isochart::Vec3d>& directions);
+  ~LevelGeometry();
+  LevelGeometry(LevelGeometry&&) noexcept;
+  LevelGeometry& operator=(LevelGeometry&&) noexcept;
+
+  /// The tap at surface offset a·t1 + b·t2 (model units; t1 the direction, t2 = n × t1) from
+  /// the point at continuous image position `xy` of chart `chart` (frame of sample `frame`):
+  /// inside the chart a bilinear lookup; otherwise the offset point is located on the
+  /// surface (nearest sample facing the same way) and looked up in that sample's chart.
+  Tap locate(isochart::Vec2d xy, int chart, int frame, double a, double b) const;
+  /// Same from the centre of sample `s`.
+  Tap locate(int s, double a, double b) const;
+  /// Unit tangent t1, t2 and normal of sample s.
+  isochart::Vec3d t1(int s) const;
+  isochart::Vec3d t2(int s) const;
+  /// ∂position/∂x and ∂position/∂y at sample s (model units per texel).
+  isochart::Vec3d dpdx(int s) const;
+  isochart::Vec3d dpdy(int s) const;
+  /// Local texel size at s: sqrt(|∂p/∂x × ∂p/∂y|) (model units).
+  double texel_size(int s) const;
+  /// Position where a tap lands (its weights applied to sample positions).
+  isochart::Vec3d position(const Tap& t) const;
+
+ private:
+  struct Impl;
+  Impl* impl_;
+};
+
+}  // namespace synth

@@ -1,0 +1,709 @@
+// Multiresolution texture synthesis over an MCGIM pyramid (Wei–Levoy 2001 on Iso-charts §8
+// geometry images), quality figures, and the transfer back onto the atlas.
+
+#include "synth/synth.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <numeric>
+
+#include <Eigen/Dense>
+#include <flann/flann.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "isochart/error.h"
+#include "isochart/rng.h"
+#include "synth/exemplar.h"
+
+namespace synth {
+
+using isochart::Image;
+using isochart::Vec2d;
+using isochart::Vec3d;
+using Color = std::array<float, 3>;
+
+std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& direction, int iterations) {
+  const std::vector<Vec3d> normals = isochart::vertex_normals(mesh);
+  const bool user = isochart::norm(direction) > 0;
+  const Vec3d primary = user ? isochart::normalized(direction) : Vec3d{1, 0, 0};
+  // Where the primary axis is nearly normal, a perpendicular axis keeps the field defined.
+  const Vec3d secondary = std::fabs(primary.y) < 0.9 ? Vec3d{0, 1, 0} : Vec3d{0, 0, 1};
+  const int nv = mesh.num_vertices();
+  std::vector<Vec3d> d(nv);
+  auto project = [&](const Vec3d& v, int i) {
+    Vec3d p = v - normals[i] * isochart::dot(v, normals[i]);
+    return p;
+  };
+  for (int i = 0; i < nv; ++i) {
+    Vec3d p = project(primary, i);
+    if (isochart::norm(p) < 0.3) {
+      const Vec3d q = project(secondary, i);
+      p = isochart::norm(p) < 1e-6 ? q : p + q * (0.3 - isochart::norm(p));
+    }
+    d[i] = isochart::norm(p) > 1e-12 ? isochart::normalized(p) : Vec3d{0, 0, 0};
+  }
+  if (user || iterations <= 0) return d;
+  const isochart::Topology topo(mesh);
+  std::vector<Vec3d> next(nv);
+  for (int it = 0; it < iterations; ++it) {
+    tbb::parallel_for(0, nv, [&](int i) {
+      Vec3d sum = d[i];
+      for (int j : topo.vertex_neighbors(i)) sum = sum + d[j];
+      const Vec3d p = project(sum, i);
+      next[i] = isochart::norm(p) > 1e-12 ? isochart::normalized(p) : d[i];
+    });
+    std::swap(d, next);
+  }
+  return d;
+}
+
+namespace {
+
+// A kd-tree over the PCA projection of components [first, first + count) of the exemplar's
+// neighbourhood vectors.
+struct KdIndex {
+  int first = 0, count = 0, pca = 0;
+  Eigen::VectorXf mean;
+  Eigen::MatrixXf basis;            // count × pca
+  std::vector<float> projected;     // candidates × pca
+  std::unique_ptr<flann::Index<flann::L2<float>>> index;
+};
+
+// Exemplar neighbourhood vectors of one level and their kd-trees.
+struct Matcher {
+  int dim = 0;
+  int width = 0, height = 0;
+  std::vector<int> centres;         // exemplar pixel of each candidate
+  std::vector<int> candidate_of;    // exemplar pixel → candidate, −1 when not one
+  std::vector<float> features;      // candidates × dim
+  KdIndex full;                     // every component (non-causal passes)
+  KdIndex coarse;                   // coarser-level components only (first pass), if any
+  double variance = 0;              // mean per-component variance of the exemplar colours
+};
+
+float pixel_clamped(const Image& img, double x, double y, int c) {
+  // Bilinear with clamped borders; x, y in pixel-centre coordinates.
+  x = std::clamp(x, 0.0, img.width - 1.0);
+  y = std::clamp(y, 0.0, img.height - 1.0);
+  const int x0 = std::min(static_cast<int>(x), img.width - 1), y0 = std::min(static_cast<int>(y), img.height - 1);
+  const int x1 = std::min(x0 + 1, img.width - 1), y1 = std::min(y0 + 1, img.height - 1);
+  const double ax = x - x0, ay = y - y0;
+  return static_cast<float>((1 - ay) * ((1 - ax) * img.at(x0, y0, c) + ax * img.at(x1, y0, c)) +
+                            ay * ((1 - ax) * img.at(x0, y1, c) + ax * img.at(x1, y1, c)));
+}
+
+// Neighbourhood of exemplar pixel (x, y): the n×n square at this level (row offsets flipped:
+// +b on the surface is up in the image), then the nc×nc square of the coarser level.
+void exemplar_neighborhood(const Image& e, const Image* coarse, double ratio, int n, int nc, int x,
+                           int y, float* out) {
+  const int r = n / 2, rc = nc / 2;
+  int k = 0;
+  for (int b = -r; b <= r; ++b)
+    for (int a = -r; a <= r; ++a)
+      for (int c = 0; c < 3; ++c)
+        out[k++] = e.at(std::clamp(x + a, 0, e.width - 1), std::clamp(y - b, 0, e.height - 1), c);
+  if (!coarse) return;
+  const double cx = (x + 0.5) * ratio - 0.5, cy = (y + 0.5) * ratio - 0.5;
+  for (int b = -rc; b <= rc; ++b)
+    for (int a = -rc; a <= rc; ++a)
+      for (int c = 0; c < 3; ++c) out[k++] = pixel_clamped(*coarse, cx + a, cy - b, c);
+}
+
+Matcher build_matcher(const Image& e, const Image* coarse, double ratio, int n, int nc, int pca_dims) {
+  Matcher m;
+  m.width = e.width;
+  m.height = e.height;
+  m.dim = 3 * (n * n + (coarse ? nc * nc : 0));
+  // Centres whose square lies inside the exemplar, when there are enough of them: clamped
+  // borders are not part of the pattern.
+  const int r = n / 2;
+  const bool inner = e.width - 2 * r >= 8 && e.height - 2 * r >= 8;
+  for (int y = inner ? r : 0; y < (inner ? e.height - r : e.height); ++y)
+    for (int x = inner ? r : 0; x < (inner ? e.width - r : e.width); ++x) m.centres.push_back(y * e.width + x);
+  const int count = static_cast<int>(m.centres.size());
+  m.candidate_of.assign(static_cast<std::size_t>(e.width) * e.height, -1);
+  for (int i = 0; i < count; ++i) m.candidate_of[m.centres[i]] = i;
+  m.features.resize(static_cast<std::size_t>(count) * m.dim);
+  tbb::parallel_for(0, count, [&](int i) {
+    exemplar_neighborhood(e, coarse, ratio, n, nc, m.centres[i] % e.width, m.centres[i] / e.width,
+                          &m.features[static_cast<std::size_t>(i) * m.dim]);
+  });
+  Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> f(m.features.data(), count, m.dim);
+  auto build = [&](KdIndex& kd, int first, int comps) {
+    kd.first = first;
+    kd.count = comps;
+    const Eigen::MatrixXf block = f.middleCols(first, comps);
+    kd.mean = block.colwise().mean().transpose();
+    const Eigen::MatrixXf centred = block.rowwise() - kd.mean.transpose();
+    const Eigen::MatrixXd cov = (centred.transpose() * centred).cast<double>() / std::max(1, count);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(cov);
+    kd.pca = std::min(pca_dims, comps);
+    // Eigenvalues come in increasing order: keep the last `pca` vectors.
+    kd.basis = eig.eigenvectors().rightCols(kd.pca).cast<float>();
+    kd.projected.resize(static_cast<std::size_t>(count) * kd.pca);
+    Eigen::Map<Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> p(kd.projected.data(), count, kd.pca);
+    p = centred * kd.basis;
+    flann::Matrix<float> data(kd.projected.data(), count, kd.pca);
+    kd.index = std::make_unique<flann::Index<flann::L2<float>>>(data, flann::KDTreeSingleIndexParams(12));
+    kd.index->buildIndex();
+  };
+  build(m.full, 0, m.dim);
+  if (coarse) build(m.coarse, 3 * n * n, m.dim - 3 * n * n);
+  double var = 0;
+  for (int c = 0; c < 3; ++c) {
+    double s = 0, s2 = 0;
+    for (int i = 0; i < e.width * e.height; ++i) {
+      s += e.pixels[i * 3 + c];
+      s2 += double(e.pixels[i * 3 + c]) * e.pixels[i * 3 + c];
+    }
+    const double mu = s / (e.width * e.height);
+    var += std::max(0.0, s2 / (e.width * e.height) - mu * mu);
+  }
+  m.variance = var / 3;
+  return m;
+}
+
+struct Match {
+  int pixel = -1;     // exemplar pixel index
+  double error = 0;   // mean squared difference per valid component
+};
+
+// `query`: dim values; `valid`: dim/3 flags per tap (a missing tap is left out).
+// `coherent`: further exemplar pixels to re-rank (Ashikhmin's coherent candidates: where the
+// already-chosen neighbours' exemplar positions say this sample should continue).
+// Candidates come from `kd` (missing components at the mean), then are re-ranked exactly.
+Match best_match(const Matcher& m, const KdIndex& kd, const float* query, const std::vector<char>& valid,
+                 int candidates, const std::vector<int>& coherent) {
+  Eigen::VectorXf q(kd.count);
+  for (int i = 0; i < kd.count; ++i) {
+    const int c = kd.first + i;
+    q[i] = valid[c / 3] ? query[c] - kd.mean[i] : 0.0f;
+  }
+  Eigen::VectorXf proj = kd.basis.transpose() * q;
+  const int k = std::min<int>(candidates, static_cast<int>(m.centres.size()));
+  std::vector<int> idx(k);
+  std::vector<float> dist(k);
+  flann::Matrix<float> qm(proj.data(), 1, kd.pca);
+  flann::Matrix<int> im(idx.data(), 1, k);
+  flann::Matrix<float> dm(dist.data(), 1, k);
+  kd.index->knnSearch(qm, im, dm, k, flann::SearchParams(-1, 1.0f));
+  Match best;
+  best.error = std::numeric_limits<double>::infinity();
+  int count = 0;
+  for (int i = 0; i < m.dim; ++i) count += valid[i / 3] ? 1 : 0;
+  for (int px : coherent)
+    if (px >= 0 && m.candidate_of[px] >= 0) idx.push_back(m.candidate_of[px]);
+  for (std::size_t j = 0; j < idx.size(); ++j) {
+    if (idx[j] < 0) continue;
+    const float* f = &m.features[static_cast<std::size_t>(idx[j]) * m.dim];
+    double d = 0;
+    for (int i = 0; i < m.dim; ++i)
+      if (valid[i / 3]) d += double(query[i] - f[i]) * (query[i] - f[i]);
+    d /= std::max(1, count);
+    const int px = m.centres[idx[j]];
+    if (d < best.error || (d == best.error && px < best.pixel)) best = {px, d};
+  }
+  return best;
+}
+
+void fill_gutter(Image& img, std::vector<char>& filled) {
+  // Multi-source breadth-first search: every empty texel takes the nearest filled texel's
+  // colour (4-neighbour steps, first reached wins in a fixed order).
+  const int w = img.width, h = img.height;
+  std::deque<int> queue;
+  for (int i = 0; i < w * h; ++i)
+    if (filled[i]) queue.push_back(i);
+  if (queue.empty()) return;
+  while (!queue.empty()) {
+    const int i = queue.front();
+    queue.pop_front();
+    const int x = i % w, y = i / w;
+    const int nb[4][2] = {{x + 1, y}, {x - 1, y}, {x, y + 1}, {x, y - 1}};
+    for (const auto& p : nb) {
+      if (p[0] < 0 || p[1] < 0 || p[0] >= w || p[1] >= h) continue;
+      const int j = p[1] * w + p[0];
+      if (filled[j]) continue;
+      filled[j] = 1;
+      for (int c = 0; c < img.channels; ++c) img.pixels[j * img.channels + c] = img.pixels[i * img.channels + c];
+      queue.push_back(j);
+    }
+  }
+}
+
+struct LevelTaps {
+  int fine = 0, coarse = 0;       // taps per group
+  std::vector<Tap> taps;          // groups × (fine + coarse)
+};
+
+}  // namespace
+
+SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Level>& pyramid,
+                       const Image& exemplar, const SynthOptions& o, const isochart::Progress& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (pyramid.empty()) throw isochart::InputError("", "synthesis needs at least one MCGIM level");
+  if (o.neighborhood < 3 || o.neighborhood % 2 == 0)
+    throw isochart::InputError("", "neighborhood must be odd and at least 3");
+  if (o.coarse_neighborhood < 1 || o.coarse_neighborhood % 2 == 0)
+    throw isochart::InputError("", "coarse neighborhood must be odd and at least 1");
+  if (o.first_pass_batch < 1 || o.full_passes < 0 || o.coarsest_passes < 0 || o.candidates < 1 || o.pca_dims < 1)
+    throw isochart::InputError("", "synthesis passes, batches, candidates and PCA dimensions must be positive");
+  if (!(o.scale >= 0) || !std::isfinite(o.scale)) throw isochart::InputError("", "scale must be positive");
+  if (exemplar.channels != 3 || exemplar.width < 4 || exemplar.height < 4)
+    throw isochart::InputError("", "the exemplar must be RGB and at least 4x4 (see load_exemplar)");
+
+  SynthResult res;
+  const int nl = static_cast<int>(pyramid.size());
+  if (!(o.pixels_per_texel >= 0) || !std::isfinite(o.pixels_per_texel))
+    throw isochart::InputError("", "pixels per texel must be positive");
+  res.scale = o.pixels_per_texel > 0 && pyramid[0].stats.texel_size > 0 ? o.pixels_per_texel / pyramid[0].stats.texel_size
+              : o.scale > 0                                               ? o.scale
+                                        : exemplar.width / (0.1 * isochart::bounding_box(atlas).diagonal());
+
+  // Exemplar pyramid: one level per MCGIM level, a pixel the size of that level's texel.
+  std::vector<double> factors(nl);
+  for (int l = 0; l < nl; ++l) factors[l] = res.scale * pyramid[l].stats.texel_size;
+  const std::vector<ExemplarLevel> ex = exemplar_pyramid(exemplar, factors);
+
+  const std::vector<Vec3d> field = direction_field(atlas, o.direction, o.relax_iterations);
+
+  std::vector<LevelGeometry> geo;
+  std::vector<std::vector<int>> reps(nl);  // a sample per zipper group
+  geo.reserve(nl);
+  for (int l = 0; l < nl; ++l) {
+    const mcgim::GeometryImage& g = pyramid[l].image;
+    const int n = g.width * g.height;
+    std::vector<Vec3d> dir(n, Vec3d{0, 0, 0}), group_dir(g.num_groups, Vec3d{0, 0, 0});
+    reps[l].assign(g.num_groups, -1);
+    for (int s = 0; s < n; ++s) {
+      if (!g.defined(s)) continue;
+      const int f = g.face[s];
+      Vec3d d{0, 0, 0};
+      if (f >= 0 && f < atlas.num_faces())
+        for (int k = 0; k < 3; ++k) d = d + field[atlas.faces[f][k]] * g.barycentric[s][k];
+      group_dir[g.group[s]] = group_dir[g.group[s]] + d;
+      if (reps[l][g.group[s]] < 0) reps[l][g.group[s]] = s;
+    }
+    for (int s = 0; s < n; ++s)
+      if (g.defined(s)) dir[s] = group_dir[g.group[s]];
+    geo.emplace_back(pyramid[l], dir);
+  }
+  isochart::report(progress, isochart::Stage::Synthesis, 0.05);
+
+  const int n = o.neighborhood, nc = o.coarse_neighborhood;
+  res.group_colors.resize(nl);
+  res.levels.resize(nl);
+  for (int l = nl - 1; l >= 0; --l) {
+    const auto tl = std::chrono::steady_clock::now();
+    const mcgim::Level& lv = pyramid[l];
+    const mcgim::GeometryImage& g = lv.image;
+    const bool has_coarse = l + 1 < nl;
+    const int groups = g.num_groups;
+    const Image& e = ex[l].image;
+    const double spacing = ex[l].actual_factor / res.scale;
+    SynthLevelStats& st = res.levels[l];
+    st.width = g.width;
+    st.height = g.height;
+    st.exemplar_width = e.width;
+    st.exemplar_height = e.height;
+    st.texel_size = lv.stats.texel_size;
+    st.exemplar_factor = ex[l].actual_factor;
+    st.groups = groups;
+
+    // Taps of every group: n×n at this level, nc×nc on the coarser level around the sample's
+    // normal-shooting landing point.
+    LevelTaps lt;
+    lt.fine = n * n;
+    lt.coarse = has_coarse ? nc * nc : 0;
+    const int per = lt.fine + lt.coarse;
+    lt.taps.resize(static_cast<std::size_t>(groups) * per);
+    const double cspacing = has_coarse ? ex[l + 1].actual_factor / res.scale : 0;
+    tbb::parallel_for(0, groups, [&](int gi) {
+      const int s = reps[l][gi];
+      Tap* out = &lt.taps[static_cast<std::size_t>(gi) * per];
+      if (s < 0) return;
+      const int r = n / 2;
+      int k = 0;
+      for (int b = -r; b <= r; ++b)
+        for (int a = -r; a <= r; ++a) out[k++] = geo[l].locate(s, a * spacing, b * spacing);
+      if (!has_coarse) return;
+      const mcgim::Correspondence& cr = lv.coarser[s];
+      if (cr.face < 0) return;
+      const auto& corners = pyramid[l + 1].remesh.face_samples[cr.face];
+      // The frame of the corner nearest to the landing point.
+      int best = 0;
+      for (int c = 1; c < 3; ++c)
+        if (cr.barycentric[c] > cr.barycentric[best]) best = c;
+      const int frame = corners[best];
+      const int rc = nc / 2;
+      for (int b = -rc; b <= rc; ++b)
+        for (int a = -rc; a <= rc; ++a)
+          out[k++] = geo[l + 1].locate(cr.image_xy, cr.chart, frame, a * cspacing, b * cspacing);
+    });
+    for (const Tap& t : lt.taps) {
+      st.missing_taps += t.valid() ? 0 : 1;
+      st.seam_taps += t.crossed ? 1 : 0;
+    }
+
+    const Image* coarse_img = has_coarse ? &ex[l + 1].image : nullptr;
+    const double ratio = has_coarse ? ex[l].actual_factor / ex[l + 1].actual_factor : 1;
+    const Matcher matcher = build_matcher(e, coarse_img, ratio, n, has_coarse ? nc : 0, o.pca_dims);
+
+    std::vector<Color>& col = res.group_colors[l];
+    col.assign(groups, Color{0.5f, 0.5f, 0.5f});
+    std::vector<int> src(groups, -1);  // exemplar pixel each group was copied from
+    auto set_pixel = [&](std::vector<Color>& cs, std::vector<int>& ss, int gi, int px) {
+      for (int c = 0; c < 3; ++c) cs[gi][c] = e.pixels[px * 3 + c];
+      ss[gi] = px;
+    };
+    if (!has_coarse) {
+      // Coarsest level: each chart starts as a copy of the exemplar at a random offset, laid
+      // out by the direction field (per-sample noise would make the first non-causal passes
+      // regress to the exemplar's mean colour).
+      std::vector<std::array<double, 3>> centre(g.num_charts, {0, 0, 0});
+      for (int gi = 0; gi < groups; ++gi) {
+        const int s = reps[l][gi];
+        if (s < 0) continue;
+        auto& c = centre[g.chart[s]];
+        c[0] += s % g.width + 0.5, c[1] += s / g.width + 0.5, c[2] += 1;
+      }
+      auto reflect = [](double v, int size) {
+        const double period = 2.0 * size;
+        v = std::fmod(v, period);
+        if (v < 0) v += period;
+        if (v >= size) v = period - v - 1e-9;
+        return std::clamp(static_cast<int>(v), 0, size - 1);
+      };
+      for (int gi = 0; gi < groups; ++gi) {
+        const int s = reps[l][gi];
+        if (s < 0) continue;
+        const int ch = g.chart[s];
+        isochart::Rng rng(isochart::mix_seed(o.seed, 5000u + static_cast<std::uint64_t>(ch)));
+        const double ox = rng.uniform() * e.width, oy = rng.uniform() * e.height;
+        const auto& c = centre[ch];
+        const double ddx = s % g.width + 0.5 - c[0] / c[2], ddy = s / g.width + 0.5 - c[1] / c[2];
+        const Vec3d w = geo[l].dpdx(s) * ddx + geo[l].dpdy(s) * ddy;
+        const int px = reflect(ox + isochart::dot(geo[l].t1(s), w) / spacing, e.width);
+        const int py = reflect(oy - isochart::dot(geo[l].t2(s), w) / spacing, e.height);
+        set_pixel(col, src, gi, py * e.width + px);
+      }
+    } else {
+      // Upsampled from the coarser level through the correspondence.
+      const std::vector<Color>& cc = res.group_colors[l + 1];
+      const mcgim::GeometryImage& cg = pyramid[l + 1].image;
+      for (int gi = 0; gi < groups; ++gi) {
+        const int s = reps[l][gi];
+        if (s < 0) continue;
+        const mcgim::Correspondence& cr = lv.coarser[s];
+        if (cr.face < 0) continue;
+        const auto& corners = pyramid[l + 1].remesh.face_samples[cr.face];
+        Color v{0, 0, 0};
+        for (int k = 0; k < 3; ++k)
+          for (int c = 0; c < 3; ++c) v[c] += static_cast<float>(cr.barycentric[k]) * cc[cg.group[corners[k]]][c];
+        col[gi] = v;
+      }
+    }
+    const std::vector<Color>* coarse_col = has_coarse ? &res.group_colors[l + 1] : nullptr;
+    const mcgim::GeometryImage* cgi = has_coarse ? &pyramid[l + 1].image : nullptr;
+
+    auto gather = [&](int gi, const std::vector<Color>& cur, const std::vector<char>* done, float* q,
+                      std::vector<char>& valid) {
+      const Tap* t = &lt.taps[static_cast<std::size_t>(gi) * per];
+      for (int k = 0; k < per; ++k) {
+        const bool fine = k < lt.fine;
+        const mcgim::GeometryImage& gg = fine ? g : *cgi;
+        const std::vector<Color>& cs = fine ? cur : *coarse_col;
+        bool ok = t[k].valid();
+        float v[3] = {0, 0, 0};
+        for (int j = 0; ok && j < 4 && t[k].sample[j] >= 0; ++j) {
+          const int grp = gg.group[t[k].sample[j]];
+          if (fine && done && !(*done)[grp]) ok = false;
+          for (int c = 0; c < 3; ++c) v[c] += t[k].weight[j] * cs[grp][c];
+        }
+        valid[k] = ok ? 1 : 0;
+        for (int c = 0; c < 3; ++c) q[k * 3 + c] = ok ? v[c] : 0.0f;
+      }
+    };
+    // Coherent candidates: the exemplar pixel that continues each synthesized neighbour.
+    const int r = n / 2;
+    auto coherent = [&](int gi, const std::vector<int>& ss, const std::vector<char>* done, std::vector<int>& out) {
+      out.clear();
+      const Tap* t = &lt.taps[static_cast<std::size_t>(gi) * per];
+      for (int k = 0; k < lt.fine; ++k) {
+        if (!t[k].valid()) continue;
+        int j = 0;
+        for (int i = 1; i < 4 && t[k].sample[i] >= 0; ++i)
+          if (t[k].weight[i] > t[k].weight[j]) j = i;
+        const int grp = g.group[t[k].sample[j]];
+        if ((done && !(*done)[grp]) || ss[grp] < 0) continue;
+        const int a = k % n - r, b = k / n - r;
+        const int x = ss[grp] % e.width - a, y = ss[grp] / e.width + b;
+        if (x < 0 || y < 0 || x >= e.width || y >= e.height) continue;
+        out.push_back(y * e.width + x);
+      }
+    };
+    auto run_pass = [&](const std::vector<int>& which, const std::vector<char>* done, std::vector<Color>& out,
+                        std::vector<int>& out_src, std::vector<double>* errors) {
+      tbb::parallel_for(tbb::blocked_range<int>(0, static_cast<int>(which.size()), 64),
+                        [&](const tbb::blocked_range<int>& range) {
+                          std::vector<float> q(matcher.dim);
+                          std::vector<char> valid(per);
+                          std::vector<int> coh;
+                          for (int i = range.begin(); i < range.end(); ++i) {
+                            const int gi = which[i];
+                            if (reps[l][gi] < 0) continue;
+                            gather(gi, col, done, q.data(), valid);
+                            if (std::none_of(valid.begin(), valid.end(), [](char c) { return c != 0; })) continue;
+                            coherent(gi, src, done, coh);
+                            const Match mt = best_match(matcher, matcher.full, q.data(), valid, o.candidates, coh);
+                            if (mt.pixel < 0) continue;
+                            set_pixel(out, out_src, gi, mt.pixel);
+                            if (errors) (*errors)[gi] = mt.error;
+                          }
+                        });
+    };
+    std::vector<int> all(groups);
+    std::iota(all.begin(), all.end(), 0);
+    if (has_coarse) {
+      // First pass: coarser level plus what earlier samples synthesized, in a random order.
+      std::vector<int> order = all;
+      isochart::Rng rng(isochart::mix_seed(o.seed, 1000u + static_cast<std::uint64_t>(l)));
+      for (int i = groups - 1; i > 0; --i) std::swap(order[i], order[rng.below(static_cast<std::uint64_t>(i) + 1)]);
+      std::vector<char> done(groups, 0);
+      // Batches of consecutive samples in that order are matched in parallel, each seeing the
+      // batches before it: with a batch far smaller than the level, almost no two samples of
+      // one batch are neighbours, so this is Wei–Levoy's sequential order in effect.
+      const int batch = std::max(1, o.first_pass_batch);
+      std::vector<int> picked(batch);
+      for (int start = 0; start < groups; start += batch) {
+        const int count = std::min(batch, groups - start);
+        tbb::parallel_for(tbb::blocked_range<int>(0, count, 8), [&](const tbb::blocked_range<int>& range) {
+          std::vector<float> q(matcher.dim);
+          std::vector<char> valid(per);
+          std::vector<int> coh;
+          for (int i = range.begin(); i < range.end(); ++i) {
+            const int gi = order[start + i];
+            picked[i] = -1;
+            if (reps[l][gi] < 0) continue;
+            gather(gi, col, &done, q.data(), valid);
+            if (std::none_of(valid.begin(), valid.end(), [](char c) { return c != 0; })) continue;
+            coherent(gi, src, &done, coh);
+            picked[i] = best_match(matcher, matcher.coarse, q.data(), valid, o.candidates, coh).pixel;
+          }
+        });
+        for (int i = 0; i < count; ++i) {
+          const int gi = order[start + i];
+          if (picked[i] >= 0) set_pixel(col, src, gi, picked[i]);
+          done[gi] = 1;
+        }
+        if ((start / batch) % 64 == 0)
+          isochart::report(progress, isochart::Stage::Synthesis,
+                           0.05 + 0.9 * ((nl - 1 - l) + 0.5 * start / double(groups)) / nl);
+      }
+    }
+    const int passes = has_coarse ? o.full_passes : o.coarsest_passes;
+    for (int p = 0; p < passes; ++p) {
+      std::vector<Color> next = col;
+      std::vector<int> next_src = src;
+      run_pass(all, nullptr, next, next_src, nullptr);
+      col.swap(next);
+      src.swap(next_src);
+    }
+    if (l == 0) {
+      // Quality: the final neighbourhoods against their best matches.
+      std::vector<Color> scratch = col;
+      std::vector<int> scratch_src = src;
+      std::vector<double> errors(groups, 0.0);
+      run_pass(all, nullptr, scratch, scratch_src, &errors);
+      double sum = 0;
+      long long count = 0;
+      for (int gi = 0; gi < groups; ++gi)
+        if (reps[l][gi] >= 0) sum += errors[gi], ++count;
+      const double mean = count ? sum / count : 0;
+      res.match_error = matcher.variance > 1e-12 ? mean / matcher.variance : mean;
+    }
+    st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tl).count();
+    isochart::report(progress, isochart::Stage::Synthesis, 0.05 + 0.9 * (nl - l) / double(nl));
+  }
+
+  // Seam error and texel-scale spread on the finest level.
+  {
+    const mcgim::GeometryImage& g = pyramid[0].image;
+    const std::vector<Color>& col = res.group_colors[0];
+    const double d = 2 * ex[0].actual_factor / res.scale;
+    std::vector<std::array<double, 4>> acc(reps[0].size(), {0, 0, 0, 0});
+    tbb::parallel_for(0, static_cast<int>(reps[0].size()), [&](int gi) {
+      const int s = reps[0][gi];
+      if (s < 0) return;
+      const double dirs[4][2] = {{d, 0}, {-d, 0}, {0, d}, {0, -d}};
+      for (const auto& dd : dirs) {
+        const Tap t = geo[0].locate(s, dd[0], dd[1]);
+        if (!t.valid()) continue;
+        double v[3] = {0, 0, 0};
+        for (int j = 0; j < 4 && t.sample[j] >= 0; ++j)
+          for (int c = 0; c < 3; ++c) v[c] += t.weight[j] * col[g.group[t.sample[j]]][c];
+        const double diff = (std::fabs(v[0] - col[gi][0]) + std::fabs(v[1] - col[gi][1]) + std::fabs(v[2] - col[gi][2])) / 3;
+        if (t.crossed) acc[gi][0] += diff, acc[gi][1] += 1;
+        else acc[gi][2] += diff, acc[gi][3] += 1;
+      }
+    });
+    double seam = 0, seam_n = 0, inner = 0, inner_n = 0;
+    for (const auto& a : acc) seam += a[0], seam_n += a[1], inner += a[2], inner_n += a[3];
+    res.seam_pairs = static_cast<long long>(seam_n);
+    const double ms = seam_n > 0 ? seam / seam_n : 0, mi = inner_n > 0 ? inner / inner_n : 0;
+    // Differences below float rounding of colours count as none.
+    res.seam_error = mi > 1e-6 ? ms / mi : (ms > 1e-6 ? std::numeric_limits<double>::infinity() : 0.0);
+    double s1 = 0, s2 = 0;
+    long long cnt = 0;
+    for (int s = 0; s < g.width * g.height; ++s) {
+      if (!g.defined(s) || geo[0].texel_size(s) <= 0) continue;
+      const double lg = std::log(geo[0].texel_size(s));
+      s1 += lg;
+      s2 += lg * lg;
+      ++cnt;
+    }
+    res.texel_scale_spread = cnt ? std::sqrt(std::max(0.0, s2 / cnt - (s1 / cnt) * (s1 / cnt))) : 0;
+
+    // The texture image, rows flipped (sample row 0 is the image's bottom).
+    res.texture = Image(g.width, g.height, 3);
+    std::vector<char> filled(static_cast<std::size_t>(g.width) * g.height, 0);
+    for (int y = 0; y < g.height; ++y)
+      for (int x = 0; x < g.width; ++x) {
+        const int s = g.index(x, y);
+        if (!g.defined(s)) continue;
+        const int row = g.height - 1 - y;
+        for (int c = 0; c < 3; ++c) res.texture.at(x, row, c) = col[g.group[s]][c];
+        filled[static_cast<std::size_t>(row) * g.width + x] = 1;
+      }
+    fill_gutter(res.texture, filled);
+  }
+  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, const Image& texture, int size) {
+  if (size < 2 || size > 16384) throw isochart::InputError("", "atlas texture size must be in 2..16384");
+  if (!atlas.has_uvs()) throw isochart::InputError("", "the atlas has no texture coordinates");
+  const mcgim::GeometryImage& g = level.image;
+  const int nf = atlas.num_faces();
+  // Per image chart, the affine map atlas uv → image xy, least squares over its samples.
+  std::vector<Eigen::Matrix3d> ata(g.num_charts, Eigen::Matrix3d::Zero());
+  std::vector<Eigen::Matrix<double, 3, 2>> atb(g.num_charts, Eigen::Matrix<double, 3, 2>::Zero());
+  std::vector<int> face_chart(nf, -1);
+  auto face_uv = [&](int f, const Vec3d& b) {
+    const auto& fu = atlas.face_uvs[f];
+    return atlas.uvs[fu[0]] * b.x + atlas.uvs[fu[1]] * b.y + atlas.uvs[fu[2]] * b.z;
+  };
+  for (int s = 0; s < g.width * g.height; ++s) {
+    if (!g.defined(s) || g.face[s] < 0 || g.face[s] >= nf) continue;
+    const Vec2d uv = face_uv(g.face[s], g.barycentric[s]);
+    const Eigen::Vector3d a(uv.x, uv.y, 1);
+    const int c = g.chart[s];
+    ata[c] += a * a.transpose();
+    atb[c].col(0) += a * (s % g.width + 0.5);
+    atb[c].col(1) += a * (s / g.width + 0.5);
+    face_chart[g.face[s]] = c;
+  }
+  std::vector<Eigen::Matrix<double, 3, 2>> affine(g.num_charts);
+  std::vector<char> fitted(g.num_charts, 0);
+  for (int c = 0; c < g.num_charts; ++c) {
+    if (ata[c](2, 2) < 3) continue;
+    Eigen::FullPivLU<Eigen::Matrix3d> lu(ata[c]);
+    if (lu.rank() < 3) continue;
+    affine[c] = lu.solve(atb[c]);
+    fitted[c] = 1;
+  }
+  // Faces too small to hold a sample take the chart of a uv-continuous neighbour.
+  {
+    const isochart::Topology topo(atlas);
+    std::deque<int> queue;
+    for (int f = 0; f < nf; ++f)
+      if (face_chart[f] >= 0) queue.push_back(f);
+    auto uv_of = [&](int f, int v) {
+      for (int k = 0; k < 3; ++k)
+        if (atlas.faces[f][k] == v) return atlas.face_uvs[f][k];
+      return -1;
+    };
+    while (!queue.empty()) {
+      const int f = queue.front();
+      queue.pop_front();
+      for (int k = 0; k < 3; ++k) {
+        const int h = topo.opposite_face(f, k);
+        if (h < 0 || face_chart[h] >= 0) continue;
+        if (!atlas.face_groups.empty() && atlas.face_groups[h] != atlas.face_groups[f]) continue;
+        const int v0 = atlas.faces[f][k], v1 = atlas.faces[f][(k + 1) % 3];
+        if (uv_of(h, v0) != atlas.face_uvs[f][k] || uv_of(h, v1) != atlas.face_uvs[f][(k + 1) % 3]) continue;
+        face_chart[h] = face_chart[f];
+        queue.push_back(h);
+      }
+    }
+  }
+  Image out(size, size, 3);
+  std::vector<char> filled(static_cast<std::size_t>(size) * size, 0);
+  auto tex = [&](int s, int c) { return texture.at(s % g.width, g.height - 1 - s / g.width, c); };
+  for (int f = 0; f < nf; ++f) {
+    const int c = face_chart[f];
+    if (c < 0 || !fitted[c]) continue;
+    const auto& fu = atlas.face_uvs[f];
+    const Vec2d p0 = atlas.uvs[fu[0]] * size, p1 = atlas.uvs[fu[1]] * size, p2 = atlas.uvs[fu[2]] * size;
+    const double area = isochart::signed_area(p0, p1, p2);
+    if (std::fabs(area) < 1e-14) continue;
+    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({p0.x, p1.x, p2.x}))));
+    const int x1 = std::min(size - 1, static_cast<int>(std::ceil(std::max({p0.x, p1.x, p2.x}))));
+    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({p0.y, p1.y, p2.y}))));
+    const int y1 = std::min(size - 1, static_cast<int>(std::ceil(std::max({p0.y, p1.y, p2.y}))));
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        const Vec2d p{x + 0.5, y + 0.5};
+        const double b0 = isochart::signed_area(p, p1, p2) / area, b1 = isochart::signed_area(p0, p, p2) / area;
+        const double b2 = 1 - b0 - b1;
+        const double eps = -1e-6;
+        if (b0 < eps || b1 < eps || b2 < eps) continue;
+        const Vec2d uv{p.x / size, p.y / size};
+        const Eigen::Vector3d a(uv.x, uv.y, 1);
+        const Eigen::Vector2d xy = affine[c].transpose() * a;
+        if (!(std::fabs(xy.x()) < 1e6 && std::fabs(xy.y()) < 1e6)) continue;
+        // Bilinear over the chart's samples, renormalized where the footprint leaves it.
+        const double fx = xy.x() - 0.5, fy = xy.y() - 0.5;
+        const int ix = static_cast<int>(std::floor(fx)), iy = static_cast<int>(std::floor(fy));
+        const double ax = fx - ix, ay = fy - iy;
+        double v[3] = {0, 0, 0}, wsum = 0;
+        for (int k = 0; k < 4; ++k) {
+          const int sx = ix + (k & 1), sy = iy + (k >> 1);
+          if (sx < 0 || sy < 0 || sx >= g.width || sy >= g.height || g.chart[g.index(sx, sy)] != c) continue;
+          const double wgt = ((k & 1) ? ax : 1 - ax) * ((k >> 1) ? ay : 1 - ay);
+          if (wgt <= 0) continue;
+          for (int ch = 0; ch < 3; ++ch) v[ch] += wgt * tex(g.index(sx, sy), ch);
+          wsum += wgt;
+        }
+        if (wsum <= 0) {
+          // Outside the chart's samples (its boundary): the nearest sample of the chart.
+          const int cx = static_cast<int>(std::lround(fx)), cy = static_cast<int>(std::lround(fy));
+          double best = std::numeric_limits<double>::infinity();
+          for (int r = 1; r <= 4 && !std::isfinite(best); ++r)
+            for (int sy = cy - r; sy <= cy + r; ++sy)
+              for (int sx = cx - r; sx <= cx + r; ++sx) {
+                if (sx < 0 || sy < 0 || sx >= g.width || sy >= g.height || g.chart[g.index(sx, sy)] != c) continue;
+                const double d = (sx - fx) * (sx - fx) + (sy - fy) * (sy - fy);
+                if (d < best) {
+                  best = d;
+                  for (int ch = 0; ch < 3; ++ch) v[ch] = tex(g.index(sx, sy), ch);
+                  wsum = 1;
+                }
+              }
+        }
+        if (wsum <= 0) continue;
+        const int row = size - 1 - y;
+        for (int ch = 0; ch < 3; ++ch) out.at(x, row, ch) = static_cast<float>(v[ch] / wsum);
+        filled[static_cast<std::size_t>(row) * size + x] = 1;
+      }
+    }
+  }
+  fill_gutter(out, filled);
+  return out;
+}
+
+}  // namespace synth

@@ -1,0 +1,294 @@
+// Tests of the synth module: exemplar input and pyramid, neighbourhood taps across seams,
+// determinism over thread counts, quality figures, and the CLI's error handling.
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include "isochart/error.h"
+#include "isochart/image.h"
+#include "mcgim/mcgim.h"
+#include "mcgim/synthetic_atlases.h"
+#include "synth/exemplar.h"
+#include "synth/synth.h"
+
+namespace fs = std::filesystem;
+using isochart::Image;
+using isochart::Vec3d;
+
+namespace {
+
+struct TempDir {
+  fs::path dir;
+  explicit TempDir(const std::string& name)
+      : dir(fs::temp_directory_path() / ("isocharts_synth_" + name + "_" + std::to_string(::getpid()))) {
+    fs::create_directories(dir);
+  }
+  ~TempDir() { fs::remove_all(dir); }
+  std::string operator/(const std::string& f) const { return (dir / f).string(); }
+  int run(const std::string& args) const {
+    const std::string cmd = std::string(ISOCHARTS_CLI) + " " + args + " > " + (dir / "stdout.txt").string() +
+                            " 2> " + (dir / "stderr.txt").string();
+    const int status = std::system(cmd.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  std::string stderr_text() const {
+    std::ifstream in(dir / "stderr.txt");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }
+};
+
+double channel_mean(const Image& img, int c) {
+  double s = 0;
+  for (int i = 0; i < img.width * img.height; ++i) s += img.pixels[i * img.channels + c];
+  return s / (img.width * img.height);
+}
+
+// A small pyramid on the hand-made cube atlas (six charts, sharp creases at every seam).
+std::vector<mcgim::Level> cube_pyramid(const isochart::Mesh& atlas, std::vector<std::array<int, 2>> sizes) {
+  mcgim::PyramidOptions po;
+  po.sizes = std::move(sizes);
+  po.level.optimize = false;
+  return mcgim::build_pyramid(atlas, po);
+}
+
+}  // namespace
+
+TEST_CASE("exemplar pyramid levels keep the colours and shrink by the texel factor", "[synth]") {
+  const Image ex = synth::make_exemplar("noise", 64, 3);
+  REQUIRE(ex.width == 64);
+  REQUIRE(ex.channels == 3);
+  const auto levels = synth::exemplar_pyramid(ex, {0.5, 1.0, 2.0, 4.0, 100.0});
+  REQUIRE(levels.size() == 5);
+  CHECK(levels[0].image.width == 128);
+  CHECK(levels[1].image.width == 64);
+  CHECK(levels[2].image.width == 32);
+  CHECK(levels[3].image.width == 16);
+  CHECK(levels[4].image.width == 4);  // never below 4×4
+  CHECK(levels[4].actual_factor == Approx(16.0));
+  for (const auto& l : levels)
+    for (int c = 0; c < 3; ++c) CHECK(channel_mean(l.image, c) == Approx(channel_mean(ex, c)).margin(0.02));
+  // Same factor 1: the exemplar itself.
+  CHECK(levels[1].image.pixels == ex.pixels);
+  // Shrinking smooths: less variance at the coarser level.
+  auto variance = [](const Image& img) {
+    const double mu = channel_mean(img, 0);
+    double v = 0;
+    for (int i = 0; i < img.width * img.height; ++i) v += std::pow(img.pixels[i * 3] - mu, 2);
+    return v / (img.width * img.height);
+  };
+  CHECK(variance(levels[3].image) < variance(levels[1].image));
+  // Deterministic and distinct per name.
+  CHECK(synth::make_exemplar("noise", 64, 3).pixels == ex.pixels);
+  for (const auto& name : synth::exemplar_names()) CHECK(synth::make_exemplar(name, 32).width == 32);
+  CHECK(synth::make_exemplar("bricks", 32).pixels != synth::make_exemplar("cells", 32).pixels);
+}
+
+TEST_CASE("bad exemplars are InputErrors", "[synth]") {
+  const TempDir tmp("bad_exemplar");
+  CHECK_THROWS_AS(synth::load_exemplar(tmp / "missing.png"), isochart::InputError);
+  Image rgba(8, 8, 4, 1.0f);
+  rgba.at(3, 2, 3) = 0.5f;
+  isochart::write_image(tmp / "transparent.png", rgba);
+  CHECK_THROWS_WITH(synth::load_exemplar(tmp / "transparent.png"), Catch::Contains("transparent"));
+  isochart::write_image(tmp / "tiny.png", Image(2, 2, 3, 0.5f));
+  CHECK_THROWS_AS(synth::load_exemplar(tmp / "tiny.png"), isochart::InputError);
+  CHECK_THROWS_AS(synth::to_rgb_exemplar(Image(8, 8, 5, 0.5f), "five"), isochart::InputError);
+  CHECK_THROWS_AS(synth::make_exemplar("plaid"), isochart::InputError);
+  // Greyscale and opaque RGBA are accepted and become RGB.
+  Image grey(8, 8, 1, 0.25f);
+  isochart::write_image(tmp / "grey.png", grey);
+  const Image g = synth::load_exemplar(tmp / "grey.png");
+  CHECK(g.channels == 3);
+  CHECK(g.at(4, 4, 2) == Approx(0.25).margin(0.003));
+  isochart::write_image(tmp / "opaque.png", Image(8, 8, 4, 1.0f));
+  CHECK(synth::load_exemplar(tmp / "opaque.png").channels == 3);
+  // The CLI turns them into exit code 2 naming the file.
+  CHECK(tmp.run("synth builtin:sphere --exemplar " + tmp / "transparent.png" + " -o " + tmp / "out.glb") == 2);
+  CHECK(tmp.stderr_text().find("transparent.png") != std::string::npos);
+  CHECK(tmp.run("synth builtin:sphere --exemplar " + tmp / "missing.png" + " -o " + tmp / "out.glb") == 2);
+  CHECK(tmp.run("synth builtin:sphere --exemplar builtin:plaid -o " + tmp / "out.glb") == 2);
+  CHECK(!fs::exists(tmp / "out.glb"));
+}
+
+TEST_CASE("a tap crossing a chart edge lands at the right 3-D place", "[synth]") {
+  // Cube [-1,1]³ with one chart per face: every seam is a 90° crease, so the right place of a
+  // tap that leaves a face is found by unfolding the neighbour face about the shared edge.
+  const isochart::Mesh atlas = mcgim_test::cube_atlas(8);
+  mcgim::LevelOptions lo;
+  lo.width = lo.height = 64;
+  lo.optimize = false;
+  const mcgim::Level level = mcgim::build_level(atlas, lo);
+  const mcgim::GeometryImage& g = level.image;
+  std::vector<Vec3d> dirs(g.width * g.height, Vec3d{0, 0, 0});
+  for (int s = 0; s < g.width * g.height; ++s) dirs[s] = std::fabs(g.normals[s].x) < 0.9 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
+  const synth::LevelGeometry geo(level, dirs);
+  const double texel = level.stats.texel_size;
+  int crossed = 0;
+  double worst = 0;
+  for (int s = 0; s < g.width * g.height; ++s) {
+    if (!g.defined(s)) continue;
+    const Vec3d p = g.positions[s];
+    // Samples of the face z = +1, away from the other edges, near the edge x = +1.
+    if (std::fabs(p.z - 1) > 1e-9 || p.x > 1 - 1e-6 || std::fabs(p.y) > 0.6 || p.x < 1 - 2 * texel) continue;
+    const double along = 3 * texel;  // leave the face in +x by about 2–3 texels
+    const synth::Tap t = geo.locate(s, along * isochart::dot(geo.t1(s), Vec3d{1, 0, 0}),
+                                    along * isochart::dot(geo.t2(s), Vec3d{1, 0, 0}));
+    REQUIRE(t.valid());
+    if (!t.crossed) continue;
+    ++crossed;
+    // Unfolded: the part beyond x = 1 goes down the side face x = +1.
+    const double beyond = along - (1 - p.x);
+    const Vec3d expected{1, p.y, 1 - beyond};
+    const Vec3d got = geo.position(t);
+    worst = std::max(worst, isochart::norm(got - expected));
+    CHECK(std::fabs(got.x - 1) < 0.3 * texel);  // on the side face
+  }
+  CHECK(crossed >= 4);
+  CHECK(worst < 0.75 * texel);
+  // Inside a chart a tap is a plain bilinear lookup at the offset position.
+  for (int s = 0; s < g.width * g.height; ++s) {
+    if (!g.defined(s) || g.normals[s].z < 0.99 || std::fabs(g.positions[s].x) > 0.5 || std::fabs(g.positions[s].y) > 0.5)
+      continue;
+    const synth::Tap t = geo.locate(s, texel, 0);
+    CHECK_FALSE(t.crossed);
+    CHECK(isochart::norm(geo.position(t) - (g.positions[s] + geo.t1(s) * texel)) < 0.05 * texel);
+    break;
+  }
+}
+
+TEST_CASE("synthesis is identical for 1 and 2 threads and keeps zipper groups one colour", "[synth]") {
+  const isochart::Mesh atlas = mcgim_test::cube_atlas(6);
+  const auto pyramid = cube_pyramid(atlas, {{48, 48}, {24, 24}});
+  const Image ex = synth::make_exemplar("cells", 48);
+  synth::SynthOptions so;
+  so.seed = 7;
+  synth::SynthResult a, b;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    a = synth::synthesize(atlas, pyramid, ex, so);
+  }
+  {
+    tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
+    b = synth::synthesize(atlas, pyramid, ex, so);
+  }
+  REQUIRE(a.texture.pixels.size() == b.texture.pixels.size());
+  CHECK(a.texture.pixels == b.texture.pixels);
+  CHECK(a.group_colors == b.group_colors);
+  CHECK(a.match_error == b.match_error);
+  CHECK(a.seam_error == b.seam_error);
+  // Every synthesized colour is an exemplar colour (no blending in the output).
+  const auto& g = pyramid[0].image;
+  const auto lvl = synth::resample_exemplar(ex, a.levels[0].exemplar_factor);
+  REQUIRE(lvl.image.width == a.levels[0].exemplar_width);
+  int checked = 0;
+  for (int s = 0; s < g.width * g.height && checked < 50; s += 37) {
+    if (!g.defined(s)) continue;
+    const auto& c = a.group_colors[0][g.group[s]];
+    bool found = false;
+    for (int i = 0; i < a.levels[0].exemplar_width * a.levels[0].exemplar_height && !found; ++i) {
+      found = lvl.image.pixels[i * 3] == c[0] && lvl.image.pixels[i * 3 + 1] == c[1] && lvl.image.pixels[i * 3 + 2] == c[2];
+    }
+    CHECK(found);
+    ++checked;
+  }
+  // Another seed gives another texture.
+  so.seed = 8;
+  CHECK(synth::synthesize(atlas, pyramid, ex, so).texture.pixels != a.texture.pixels);
+  CHECK(a.seam_pairs > 0);
+  CHECK(a.texel_scale_spread < 0.2);  // the cube's charts are isometric
+}
+
+TEST_CASE("quality figures on constructed cases", "[synth]") {
+  const isochart::Mesh atlas = mcgim_test::cube_atlas(6);
+  const auto pyramid = cube_pyramid(atlas, {{48, 48}, {24, 24}});
+  // A constant exemplar: every neighbourhood matches exactly and no seam shows.
+  const Image flat(16, 16, 3, 0.4f);
+  const synth::SynthResult r = synth::synthesize(atlas, pyramid, flat);
+  CHECK(r.match_error == Approx(0.0).margin(1e-9));
+  CHECK(r.seam_error == 0.0);
+  CHECK(std::isfinite(r.seam_error));
+  for (float v : r.texture.pixels) CHECK(v == Approx(0.4f));
+  // A structured exemplar: matches are imperfect but far better than chance, seams near 1.
+  // The exemplar spans one face (2 units), about 3 exemplar pixels per texel.
+  synth::SynthOptions so;
+  so.scale = 32;
+  const synth::SynthResult s = synth::synthesize(atlas, pyramid, synth::make_exemplar("weave", 64), so);
+  CHECK(s.match_error > 0.0);
+  CHECK(s.match_error < 1.0);
+  CHECK(s.seam_error > 0.0);
+  CHECK(s.seam_error < 1.6);
+  // Transfer back onto the atlas covers the whole image (gutter filled) with texture colours.
+  const Image t = synth::transfer_to_atlas(atlas, pyramid[0], s.texture, 64);
+  CHECK(t.width == 64);
+  double lo = 1, hi = 0;
+  for (float v : t.pixels) lo = std::min<double>(lo, v), hi = std::max<double>(hi, v);
+  CHECK(hi > lo);
+  // Bad options are InputErrors.
+  synth::SynthOptions bad;
+  bad.neighborhood = 4;
+  CHECK_THROWS_AS(synth::synthesize(atlas, pyramid, flat, bad), isochart::InputError);
+  CHECK_THROWS_AS(synth::synthesize(atlas, {}, flat), isochart::InputError);
+}
+
+TEST_CASE("isocharts synth writes textured meshes and its report", "[synth][cli]") {
+  const TempDir tmp("cli");
+  REQUIRE(tmp.run("synth builtin:sphere --levels 48,24 --atlas-size 128 --json -o " + tmp / "s.glb") == 0);
+  std::ifstream in(tmp / "stdout.txt");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  for (const char* key : {"seam_error", "match_error", "texel_scale_spread", "seconds"}) CHECK(j.contains(key));
+  for (const char* f : {"s.glb", "s.obj", "s.mtl", "s.png", "s_mcgim.glb", "s_mcgim.obj", "s_mcgim.png"})
+    CHECK(fs::exists(tmp / f));
+  const Image tex = isochart::read_image(tmp / "s.png");
+  CHECK(tex.width == 128);
+  CHECK(tmp.run("exemplar bricks --size 32 -o " + tmp / "b.png") == 0);
+  CHECK(isochart::read_image(tmp / "b.png").width == 32);
+}
+
+TEST_CASE("a tap off the mesh boundary is dropped", "[synth]") {
+  // A flat unit square, one chart: taps that leave it have nowhere to go.
+  isochart::Mesh m;
+  const int n = 8;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) {
+      m.positions.push_back({double(i) / n, double(j) / n, 0});
+      m.uvs.push_back({0.05 + 0.9 * i / n, 0.05 + 0.9 * j / n});
+    }
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      m.faces.push_back({a, b, c});
+      m.faces.push_back({a, c, d});
+      m.face_uvs.push_back({a, b, c});
+      m.face_uvs.push_back({a, c, d});
+      m.face_groups.push_back(0);
+      m.face_groups.push_back(0);
+    }
+  mcgim::LevelOptions lo;
+  lo.width = lo.height = 32;
+  lo.optimize = false;
+  const mcgim::Level level = mcgim::build_level(m, lo);
+  const mcgim::GeometryImage& g = level.image;
+  const synth::LevelGeometry geo(level, std::vector<Vec3d>(g.width * g.height, Vec3d{1, 0, 0}));
+  const double texel = level.stats.texel_size;
+  int edge = 0;
+  for (int s = 0; s < g.width * g.height; ++s) {
+    if (!g.defined(s) || g.positions[s].x < 1 - texel || std::fabs(g.positions[s].y - 0.5) > 0.3) continue;
+    ++edge;
+    CHECK_FALSE(geo.locate(s, 3 * texel, 0).valid());  // beyond x = 1
+    const synth::Tap inward = geo.locate(s, -3 * texel, 0);
+    REQUIRE(inward.valid());
+    // Boundary samples sit on the boundary edge (not on the grid), so the one-sided Jacobian
+    // there is off by up to half a texel.
+    CHECK(geo.position(inward).x == Approx(g.positions[s].x - 3 * texel).margin(0.6 * texel));
+  }
+  CHECK(edge > 0);
+}
