@@ -55,6 +55,7 @@ void add_render(CLI::App& app, Context& ctx, Action& action);
 void add_atlas(CLI::App& app, Context& ctx, Action& action);
 void add_remesh(CLI::App& app, Context& ctx, Action& action);
 void add_psnr(CLI::App& app, Context& ctx, Action& action);
+void add_sae(CLI::App& app, Context& ctx, Action& action);
 
 /// Throws InputError(file, msg) for an invalid option value (exit code 2).
 [[noreturn]] void bad_option(const std::string& message);

@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   cli::add_atlas(app, ctx, action);
   cli::add_remesh(app, ctx, action);
   cli::add_psnr(app, ctx, action);
+  cli::add_sae(app, ctx, action);
 
   try {
     app.parse(argc, argv);
