@@ -106,7 +106,10 @@ Signal make_signal(const Mesh& mesh, const std::string& spec, const std::string&
       for (int c = 0; c < 3; ++c) s.vertex_values[3 * i + c] = v[i][c];
   };
   if (spec == "normals") {
-    from_vectors(mesh.has_normals() ? mesh.normals : vertex_normals(mesh));
+    // Files may store unnormalized normals (horse.ply's have lengths around 6).
+    std::vector<Vec3d> n = mesh.has_normals() ? mesh.normals : vertex_normals(mesh);
+    for (auto& v : n) v = normalized(v);
+    from_vectors(n);
   } else if (spec == "colors" || spec == "colours") {
     if (!mesh.has_colors()) throw InputError(file, "--signal colors: mesh has no per-vertex colours");
     from_vectors(mesh.colors);

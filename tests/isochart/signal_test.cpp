@@ -141,6 +141,10 @@ TEST_CASE("bake_signal fills the gutter", "[signal]") {
 TEST_CASE("signals from a mesh and their errors", "[signal]") {
   Mesh m = plane(2);
   CHECK(make_signal(m, "normals").dimension == 3);
+  // Stored normals are normalized.
+  Mesh scaled = m;
+  scaled.normals.assign(m.positions.size(), Vec3d{0, 0, 6});
+  CHECK(make_signal(scaled, "normals").vertex_values[2] == 1.0);
   CHECK_THROWS_AS(make_signal(m, "colors", "plane.obj"), InputError);
   CHECK_THROWS_AS(make_signal(m, "curvature", "plane.obj"), InputError);
   CHECK_THROWS_AS(make_signal(m, "texture:/nonexistent/x.png", "plane.obj"), InputError);

@@ -31,7 +31,8 @@ struct Signal {
 };
 
 /// The signal named by `spec` on `mesh`:
-/// - "normals": the mesh's per-vertex normals (area-weighted face normals when it has none);
+/// - "normals": the mesh's per-vertex normals, normalized to unit length (area-weighted face
+///   normals when it has none);
 /// - "colors": the mesh's per-vertex colours (RGB in [0, 1]);
 /// - "texture:IMG": the image IMG mapped through the mesh's texture coordinates.
 /// \throw InputError(file, ...) for an unknown spec or a signal the mesh does not carry
