@@ -37,7 +37,8 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   const int width = a.width > 0 ? a.width : a.res;
   const int height = a.height > 0 ? a.height : a.res;
   isochart::Mesh mesh = ctx.load(a.input).mesh;
-  if (!mesh.has_uvs()) throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
+  if (!mesh.has_uvs())
+    throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
   // The signal lives on the source mesh (same vertices and faces) when one is given: e.g. its
   // vertex colours, or a texture through its original texture coordinates.
   isochart::Signal signal;
@@ -87,9 +88,12 @@ void add_sae(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("input", args->input, "Mesh with texture coordinates (OBJ/PLY/glTF)")->required();
   sub->add_option("--signal", args->signal, "normals, colors, or texture:IMG (mapped through --source's UVs)")
       ->capture_default_str();
-  sub->add_option("--source", args->source,
-                  "Mesh carrying the signal (same vertices and faces), e.g. the original with its colours or UVs");
-  sub->add_option("--res", args->res, "Texture size in texels (square)")->check(CLI::Range(1, 16384))->capture_default_str();
+  sub->add_option(
+      "--source", args->source,
+      "Mesh carrying the signal (same vertices and faces), e.g. the original with its colours or UVs");
+  sub->add_option("--res", args->res, "Texture size in texels (square)")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
   sub->add_option("--width", args->width, "Texture width (overrides --res)")->check(CLI::Range(1, 16384));
   sub->add_option("--height", args->height, "Texture height (overrides --res)")->check(CLI::Range(1, 16384));
   sub->add_option("--texture-out", args->texture_out, "Write the baked signal texture (normals as 0.5n+0.5)");

@@ -74,7 +74,8 @@ void check_signal(const Mesh& m, const Signal& s) {
                                " faces, the mesh has " + std::to_string(m.num_faces()));
   } else if (s.vertex_values.size() != static_cast<size_t>(m.num_vertices()) * s.dimension) {
     throw InputError("", "signal has " + std::to_string(s.vertex_values.size() / s.dimension) +
-                             " vertex values, the mesh has " + std::to_string(m.num_vertices()) + " vertices");
+                             " vertex values, the mesh has " + std::to_string(m.num_vertices()) +
+                             " vertices");
   }
 }
 
@@ -117,10 +118,12 @@ Signal make_signal(const Mesh& mesh, const std::string& spec, const std::string&
     const std::string path = spec.substr(8);
     if (path.empty()) throw InputError(file, "--signal texture:IMG needs an image path");
     if (!mesh.has_uvs())
-      throw InputError(file, "--signal " + spec + ": mesh has no texture coordinates to map the texture with");
+      throw InputError(file,
+                       "--signal " + spec + ": mesh has no texture coordinates to map the texture with");
     s.texture = read_image(path);
     // Alpha is not part of the signal.
-    s.dimension = s.texture.channels == 2 || s.texture.channels == 4 ? s.texture.channels - 1 : s.texture.channels;
+    s.dimension =
+        s.texture.channels == 2 || s.texture.channels == 4 ? s.texture.channels - 1 : s.texture.channels;
     if (s.dimension > 16) throw InputError(path, "image has more than 16 channels");
     s.uvs = mesh.uvs;
     s.face_uvs = mesh.face_uvs;
@@ -147,7 +150,8 @@ std::vector<Imt> face_imt(const Mesh& mesh, const Signal& signal) {
       double extent = 0;
       for (int k = 0; k < 3; ++k) {
         const Vec2d d = signal.uvs[t[(k + 1) % 3]] - signal.uvs[t[k]];
-        extent = std::max({extent, std::abs(d.x) * signal.texture.width, std::abs(d.y) * signal.texture.height});
+        extent =
+            std::max({extent, std::abs(d.x) * signal.texture.width, std::abs(d.y) * signal.texture.height});
       }
       n = std::clamp(static_cast<int>(std::ceil(extent)), 1, 32);
     }
@@ -162,11 +166,11 @@ std::vector<Imt> face_imt(const Mesh& mesh, const Signal& signal) {
     };
     for (int i = 0; i < n; ++i)
       for (int j = 0; i + j < n; ++j) {
-        add_linear_imt(point(i, j), point(i + 1, j), point(i, j + 1), at(i, j), at(i + 1, j), at(i, j + 1), dim,
-                       imt[f]);
+        add_linear_imt(point(i, j), point(i + 1, j), point(i, j + 1), at(i, j), at(i + 1, j), at(i, j + 1),
+                       dim, imt[f]);
         if (i + j + 1 < n)
-          add_linear_imt(point(i + 1, j), point(i + 1, j + 1), point(i, j + 1), at(i + 1, j), at(i + 1, j + 1),
-                         at(i, j + 1), dim, imt[f]);
+          add_linear_imt(point(i + 1, j), point(i + 1, j + 1), point(i, j + 1), at(i + 1, j),
+                         at(i + 1, j + 1), at(i, j + 1), dim, imt[f]);
       }
   }
   return imt;
@@ -175,7 +179,8 @@ std::vector<Imt> face_imt(const Mesh& mesh, const Signal& signal) {
 std::vector<Imt> signal_metric(const Mesh& mesh, const std::vector<Imt>& imt, double lambda) {
   const int nf = mesh.num_faces();
   if (static_cast<int>(imt.size()) != nf)
-    throw InputError("", "IMT has " + std::to_string(imt.size()) + " faces, the mesh has " + std::to_string(nf));
+    throw InputError("",
+                     "IMT has " + std::to_string(imt.size()) + " faces, the mesh has " + std::to_string(nf));
   const std::vector<double> area = face_areas(mesh);
   double total_area = 0, total_trace = 0;
   for (int f = 0; f < nf; ++f) {
@@ -206,7 +211,8 @@ bool jacobian(const Flat& q, const Vec2d& p0, const Vec2d& p1, const Vec2d& p2, 
 }
 
 double trace_jgj(const Imt& g, const Vec2d& ss, const Vec2d& st) {
-  return g[0] * (ss.x * ss.x + st.x * st.x) + 2 * g[1] * (ss.x * ss.y + st.x * st.y) + g[2] * (ss.y * ss.y + st.y * st.y);
+  return g[0] * (ss.x * ss.x + st.x * st.x) + 2 * g[1] * (ss.x * ss.y + st.x * st.y) +
+         g[2] * (ss.y * ss.y + st.y * st.y);
 }
 
 }  // namespace

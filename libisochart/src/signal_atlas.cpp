@@ -26,8 +26,8 @@ double since(std::chrono::steady_clock::time_point t0) {
 
 // One chart of an atlas as its own small mesh (one vertex per texture coordinate).
 struct LocalChart {
-  std::vector<int> uv_ids;     // local vertex → atlas uv id
-  std::vector<int> faces;      // local face → mesh face
+  std::vector<int> uv_ids;  // local vertex → atlas uv id
+  std::vector<int> faces;   // local face → mesh face
   std::vector<Vec3d> positions;
   std::vector<Face> tris;
   std::vector<Vec2d> uv;
@@ -108,8 +108,8 @@ bool reoptimize(LocalChart& c, const std::vector<Imt>& metric, const AtlasOption
 
 // Packs the charts with UV area ∝ sqrt(E·A_uv): for a chart whose energy at UV scale s is
 // E/s², minimizing Σ E_c/s_c² under a fixed total UV area Σ s_c²·A_c gives s_c⁴ ∝ E_c/A_c.
-void pack_weighted(const Mesh& mesh, Atlas& atlas, std::vector<LocalChart>& charts, const std::vector<Imt>& metric,
-                   const PackOptions& po, const Progress& progress) {
+void pack_weighted(const Mesh& mesh, Atlas& atlas, std::vector<LocalChart>& charts,
+                   const std::vector<Imt>& metric, const PackOptions& po, const Progress& progress) {
   std::vector<PackChart> pc(charts.size());
   double total_area = 0, total_weight = 0;
   for (size_t i = 0; i < charts.size(); ++i) {
@@ -201,7 +201,8 @@ Atlas build_signal_atlas(const Mesh& mesh, const Signal& signal, const AtlasOpti
       const std::vector<Imt> weak = signal_metric(mesh, imt, so.lambda / 4);
       std::vector<char> kept(charts.size(), 0);
       tbb::parallel_for(size_t(0), charts.size(), [&](size_t i) {
-        const std::uint64_t seed = mix_seed(options.seed, static_cast<std::uint64_t>(charts[i].faces.front()));
+        const std::uint64_t seed =
+            mix_seed(options.seed, static_cast<std::uint64_t>(charts[i].faces.front()));
         kept[i] = reoptimize(charts[i], metric, options, so.max_geometric_l2, seed) ||
                   reoptimize(charts[i], weak, options, so.max_geometric_l2, seed + 1);
       });

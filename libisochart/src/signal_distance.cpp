@@ -19,8 +19,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 }  // namespace
 
-Embedding combined_embedding(const ChartGeometry& g, const Embedding& geo, const std::vector<double>& vertex_signal,
-                             int dim, double beta, int max_dimensions) {
+Embedding combined_embedding(const ChartGeometry& g, const Embedding& geo,
+                             const std::vector<double>& vertex_signal, int dim, double beta,
+                             int max_dimensions) {
   const int q = static_cast<int>(geo.landmarks.size());
   const int nv = g.num_vertices();
   if (beta >= 1 || q < 3 || geo.num_vertices != nv || dim < 1) return geo;
@@ -78,8 +79,9 @@ Embedding combined_embedding(const ChartGeometry& g, const Embedding& geo, const
   e.landmark_distances.resize(sig.size());
   for (size_t i = 0; i < sig.size(); ++i) {
     const double dg = geo.landmark_distances[i];
-    e.landmark_distances[i] =
-        std::isfinite(dg) && std::isfinite(sig[i]) ? beta * dg + (1 - beta) * sig[i] * (avg_geo / avg_sig) : kInf;
+    e.landmark_distances[i] = std::isfinite(dg) && std::isfinite(sig[i])
+                                  ? beta * dg + (1 - beta) * sig[i] * (avg_geo / avg_sig)
+                                  : kInf;
   }
   // Classical MDS of the landmark block (§4.1), as in landmark_isomap.
   double* dist = e.landmark_distances.data();

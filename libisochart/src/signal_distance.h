@@ -16,7 +16,8 @@ namespace isochart::detail {
 /// the edges of the path of least signal change (Dijkstra); avg_* are the means over all
 /// landmark rows. `vertex_signal` is #V(parent) × dim. Returns `geo` unchanged when β ≥ 1 or
 /// the signal is constant over the chart.
-Embedding combined_embedding(const ChartGeometry& g, const Embedding& geo, const std::vector<double>& vertex_signal,
-                             int dim, double beta, int max_dimensions = 10);
+Embedding combined_embedding(const ChartGeometry& g, const Embedding& geo,
+                             const std::vector<double>& vertex_signal, int dim, double beta,
+                             int max_dimensions = 10);
 
 }  // namespace isochart::detail

@@ -17,7 +17,9 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Texel-space position of a texture coordinate: x to the right, y down from the top row.
-Vec2d to_texel(const Vec2d& uv, int w, int h) { return {uv.x * w, (1.0 - uv.y) * h}; }
+Vec2d to_texel(const Vec2d& uv, int w, int h) {
+  return {uv.x * w, (1.0 - uv.y) * h};
+}
 
 // Closest point of segment ab to p, as the parameter along ab.
 double segment_param(const Vec2d& a, const Vec2d& b, const Vec2d& p) {
@@ -67,16 +69,21 @@ void check_size(int w, int h) {
 Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height) {
   if (!mesh.has_uvs()) throw InputError("", "cannot bake a signal: mesh has no texture coordinates");
   check_size(width, height);
-  if (signal.dimension < 1 || signal.dimension > 16) throw InputError("", "signal must have 1 to 16 channels");
+  if (signal.dimension < 1 || signal.dimension > 16)
+    throw InputError("", "signal must have 1 to 16 channels");
   if (static_cast<int>(mesh.face_uvs.size()) != mesh.num_faces())
-    throw InputError("", "cannot bake a signal: texture coordinates for " + std::to_string(mesh.face_uvs.size()) +
-                             " faces, the mesh has " + std::to_string(mesh.num_faces()));
-  if (!signal.is_mapped() && signal.vertex_values.size() != static_cast<size_t>(mesh.num_vertices()) * signal.dimension)
-    throw InputError("", "signal has values for " + std::to_string(signal.vertex_values.size() / signal.dimension) +
+    throw InputError("", "cannot bake a signal: texture coordinates for " +
+                             std::to_string(mesh.face_uvs.size()) + " faces, the mesh has " +
+                             std::to_string(mesh.num_faces()));
+  if (!signal.is_mapped() &&
+      signal.vertex_values.size() != static_cast<size_t>(mesh.num_vertices()) * signal.dimension)
+    throw InputError("", "signal has values for " +
+                             std::to_string(signal.vertex_values.size() / signal.dimension) +
                              " vertices, the mesh has " + std::to_string(mesh.num_vertices()));
   if (signal.is_mapped() && static_cast<int>(signal.face_uvs.size()) != mesh.num_faces())
-    throw InputError("", "mapped signal has texture coordinates for " + std::to_string(signal.face_uvs.size()) +
-                             " faces, the mesh has " + std::to_string(mesh.num_faces()));
+    throw InputError("", "mapped signal has texture coordinates for " +
+                             std::to_string(signal.face_uvs.size()) + " faces, the mesh has " +
+                             std::to_string(mesh.num_faces()));
   const int dim = signal.dimension;
   Image img(width, height, dim, 0.0f);
   const size_t n = static_cast<size_t>(width) * height;
@@ -89,8 +96,10 @@ Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height)
     Vec2d t[3];
     for (int k = 0; k < 3; ++k) t[k] = to_texel(mesh.uvs[mesh.face_uvs[f][k]], width, height);
     if (!is_finite(t[0]) || !is_finite(t[1]) || !is_finite(t[2])) continue;
-    const double lo_x = std::min({t[0].x, t[1].x, t[2].x}) - kReach, hi_x = std::max({t[0].x, t[1].x, t[2].x}) + kReach;
-    const double lo_y = std::min({t[0].y, t[1].y, t[2].y}) - kReach, hi_y = std::max({t[0].y, t[1].y, t[2].y}) + kReach;
+    const double lo_x = std::min({t[0].x, t[1].x, t[2].x}) - kReach,
+                 hi_x = std::max({t[0].x, t[1].x, t[2].x}) + kReach;
+    const double lo_y = std::min({t[0].y, t[1].y, t[2].y}) - kReach,
+                 hi_y = std::max({t[0].y, t[1].y, t[2].y}) + kReach;
     const int x0 = std::max(0, static_cast<int>(std::floor(lo_x - 0.5)));
     const int x1 = std::min(width - 1, static_cast<int>(std::ceil(hi_x - 0.5)));
     const int y0 = std::max(0, static_cast<int>(std::floor(lo_y - 0.5)));
@@ -144,7 +153,8 @@ Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height)
           for (int c = 0; c < dim; ++c) sum[c] += img.pixels[j * dim + c];
           ++count;
         }
-      for (int c = 0; c < dim; ++c) img.pixels[static_cast<size_t>(i) * dim + c] = count ? sum[c] / count : 0.0f;
+      for (int c = 0; c < dim; ++c)
+        img.pixels[static_cast<size_t>(i) * dim + c] = count ? sum[c] / count : 0.0f;
     }
     for (int i : current) filled[i] = 1;
     for (int i : current) enqueue_neighbours(static_cast<size_t>(i));
@@ -152,7 +162,8 @@ Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height)
   return img;
 }
 
-SaeResult signal_approximation_error(const Mesh& mesh, const Signal& signal, int width, int height, Image* baked) {
+SaeResult signal_approximation_error(const Mesh& mesh, const Signal& signal, int width, int height,
+                                     Image* baked) {
   const auto t0 = std::chrono::steady_clock::now();
   const Image img = bake_signal(mesh, signal, width, height);
   const int dim = signal.dimension;
@@ -164,7 +175,8 @@ SaeResult signal_approximation_error(const Mesh& mesh, const Signal& signal, int
     const Face& F = mesh.faces[f];
     const double area = triangle_area(mesh.positions[F[0]], mesh.positions[F[1]], mesh.positions[F[2]]);
     if (!(area > 0)) continue;
-    const Vec2d u[3] = {mesh.uvs[mesh.face_uvs[f][0]], mesh.uvs[mesh.face_uvs[f][1]], mesh.uvs[mesh.face_uvs[f][2]]};
+    const Vec2d u[3] = {mesh.uvs[mesh.face_uvs[f][0]], mesh.uvs[mesh.face_uvs[f][1]],
+                        mesh.uvs[mesh.face_uvs[f][2]]};
     double extent = 0;
     for (int k = 0; k < 3; ++k) {
       const Vec2d d = u[(k + 1) % 3] - u[k];

@@ -19,11 +19,11 @@ namespace isochart {
 /// Linear: per-vertex values interpolated linearly over each face. Mapped: `texture` looked
 /// up bilinearly (clamped) through the per-corner texture coordinates `uvs`/`face_uvs`.
 struct Signal {
-  int dimension = 0;                 ///< values per sample (3 for normals and colours)
-  std::vector<double> vertex_values; ///< #V × dimension, linear signals only
-  Image texture;                     ///< mapped signals only
-  std::vector<Vec2d> uvs;            ///< mapped: texture coordinates referenced by face_uvs
-  std::vector<Face> face_uvs;        ///< mapped: #F indices into uvs
+  int dimension = 0;                  ///< values per sample (3 for normals and colours)
+  std::vector<double> vertex_values;  ///< #V × dimension, linear signals only
+  Image texture;                      ///< mapped signals only
+  std::vector<Vec2d> uvs;             ///< mapped: texture coordinates referenced by face_uvs
+  std::vector<Face> face_uvs;         ///< mapped: #F indices into uvs
 
   bool is_mapped() const { return !texture.empty(); }
   /// The signal at barycentric point (1 − b1 − b2, b1, b2) of face f, `dimension` values.
