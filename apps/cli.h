@@ -57,6 +57,7 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action);
 void add_psnr(CLI::App& app, Context& ctx, Action& action);
 void add_synth(CLI::App& app, Context& ctx, Action& action);
 void add_bench(CLI::App& app, Context& ctx, Action& action);
+void add_sae(CLI::App& app, Context& ctx, Action& action);
 
 /// Throws InputError(file, msg) for an invalid option value (exit code 2).
 [[noreturn]] void bad_option(const std::string& message);

@@ -8,6 +8,7 @@
 #include "isochart/error.h"
 #include "isochart/image.h"
 #include "isochart/render.h"
+#include "isochart/signal.h"
 
 namespace cli {
 
@@ -21,6 +22,13 @@ struct AtlasArgs {
   bool no_graph_cut = false;
   bool no_merge = false;
   isochart::AtlasOptions options;
+  // Signal-specialized atlas (§7).
+  std::string signal;
+  std::string signal_use = "full";
+  std::string imt_out;
+  std::string signal_texture_out;
+  int sae_res = 256;
+  isochart::SignalAtlasOptions signal_options;
 };
 
 nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
@@ -39,8 +47,33 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
 
   isochart::LoadResult in = ctx.load(a.input);
   const double load_seconds = seconds_since(t0);
-  isochart::Atlas atlas = isochart::build_atlas(in.mesh, a.options, ctx.progress());
+  isochart::Signal signal;
+  isochart::SignalAtlasStats sig_stats;
+  isochart::SaeResult sae;
+  if (!a.signal.empty()) {
+    if (a.signal_use == "none") a.signal_options.use = isochart::SignalUse::None;
+    else if (a.signal_use == "param") a.signal_options.use = isochart::SignalUse::Param;
+    else if (a.signal_use == "full") a.signal_options.use = isochart::SignalUse::Full;
+    else bad_option("--signal-use must be none, param or full");
+    signal = isochart::make_signal(in.mesh, a.signal, a.input);
+    if (!a.imt_out.empty()) isochart::write_imt(a.imt_out, isochart::face_imt(in.mesh, signal));
+  } else if (!a.imt_out.empty() || !a.signal_texture_out.empty()) {
+    bad_option("--imt-out and --signal-texture-out need --signal");
+  }
+  isochart::Atlas atlas =
+      a.signal.empty() ? isochart::build_atlas(in.mesh, a.options, ctx.progress())
+                       : isochart::build_signal_atlas(in.mesh, signal, a.options, a.signal_options, &sig_stats,
+                                                      ctx.progress());
   const isochart::Mesh out_mesh = atlas.apply_to(in.mesh);
+  if (!a.signal.empty()) {
+    isochart::Image baked;
+    sae = isochart::signal_approximation_error(out_mesh, signal, a.sae_res, a.sae_res, &baked);
+    if (!a.signal_texture_out.empty()) {
+      if (a.signal == "normals")
+        for (auto& v : baked.pixels) v = 0.5f * v + 0.5f;
+      isochart::write_image(a.signal_texture_out, baked);
+    }
+  }
   const auto t_out = std::chrono::steady_clock::now();
   for (const auto& out : a.outputs) isochart::save_mesh(out_mesh, out);
   if (!a.png.empty())
@@ -66,7 +99,25 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
                   {"alpha", a.options.alpha},       {"graph_cut", a.options.graph_cut},
                   {"merge", a.options.merge},       {"width", a.options.pack.width},
                   {"height", a.options.pack.height}, {"gutter", a.options.pack.gutter}};
+  if (!a.signal.empty()) {
+    j["signal"] = {{"signal", a.signal},
+                   {"use", a.signal_use},
+                   {"lambda", a.signal_options.lambda},
+                   {"chart_lambda", a.signal_options.chart_lambda},
+                   {"split_efficiency", a.signal_options.split_efficiency},
+                   {"beta", a.signal_options.beta},
+                   {"max_geometric_l2", a.signal_options.max_geometric_l2},
+                   {"signal_stretch", finite_or_null(sig_stats.signal_stretch)},
+                   {"metric_l2", finite_or_null(sig_stats.metric_l2)},
+                   {"reverted_charts", sig_stats.reverted_charts},
+                   {"sae_res", a.sae_res},
+                   {"sae", sae.sae},
+                   {"signal_rms", sae.signal_rms}};
+    j["sae"] = sae.sae;
+    if (!a.imt_out.empty()) j["imt"] = a.imt_out;
+  }
   nlohmann::json secs = s.seconds;
+  if (!a.signal.empty()) secs["sae"] = sae.seconds;
   secs["load"] = load_seconds;
   secs["output"] = seconds_since(t_out);
   secs["total"] = seconds_since(t0);
@@ -83,6 +134,9 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     << "  packing ratio     " << s.packing_ratio << "\n"
     << "  flipped / overlapping pairs  " << s.flipped << " / " << s.overlapping_pairs << "\n"
     << "  seconds           " << secs["total"].get<double>() << "\n";
+  if (!a.signal.empty())
+    t << "  signal " << a.signal << " (" << a.signal_use << "): signal stretch " << sig_stats.signal_stretch
+      << ", SAE " << sae.sae << " at " << a.sae_res << "x" << a.sae_res << "\n";
   for (const auto& out : a.outputs) t << "  wrote " << out << "\n";
   if (!a.png.empty()) t << "  wrote " << a.png << "\n";
   ctx.emit(j, t.str());
@@ -109,6 +163,32 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--alpha", o.alpha, "Graph-cut weight of dihedral angle vs. embedding distortion")->capture_default_str();
   sub->add_flag("--no-graph-cut", args->no_graph_cut, "Skip graph-cut boundary optimization (ablation)");
   sub->add_flag("--no-merge", args->no_merge, "Skip merging small charts");
+  sub->add_option("--signal", args->signal,
+                  "Specialize the atlas to a signal (§7): normals, colors, or texture:IMG (through the input's UVs)");
+  sub->add_option("--signal-use", args->signal_use,
+                  "none: geometric atlas, signal measured; param: geometric charts, signal parameterization; "
+                  "full: signal charts and parameterization")
+      ->capture_default_str();
+  sub->add_option("--beta", args->signal_options.beta, "Eq. 6 weight of geodesic vs. signal distance")
+      ->capture_default_str();
+  sub->add_option("--lambda", args->signal_options.lambda, "Weight of the signal against the geometry in the metric")
+      ->capture_default_str();
+  sub->add_option("--chart-lambda", args->signal_options.chart_lambda,
+                  "Signal weight of the metric that splits and merges charts (0 = --lambda)")
+      ->capture_default_str();
+  sub->add_option("--split-efficiency", args->signal_options.split_efficiency,
+                  "Split large signal charts whose uniform texel density reaches less than this fraction of the "
+                  "ideal signal energy (0 = off)")
+      ->capture_default_str();
+  sub->add_option("--max-geometric-l2", args->signal_options.max_geometric_l2,
+                  "Geometric L2 stretch bound kept by signal charts")
+      ->capture_default_str();
+  sub->add_option("--sae-res", args->sae_res, "Texture size at which the SAE is reported")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
+  sub->add_option("--imt-out", args->imt_out, "Write the per-face IMT (g00 g01 g11 per line)");
+  sub->add_option("--signal-texture-out", args->signal_texture_out,
+                  "Write the signal baked into the atlas at --sae-res (normals as 0.5n+0.5)");
   sub->footer("Example: isocharts atlas builtin:creature -o creature_atlas.obj --png creature_atlas.png");
   sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_atlas(ctx, *args); }; });
 }

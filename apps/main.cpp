@@ -36,6 +36,7 @@ int main(int argc, char** argv) {
   cli::add_psnr(app, ctx, action);
   cli::add_synth(app, ctx, action);
   cli::add_bench(app, ctx, action);
+  cli::add_sae(app, ctx, action);
 
   try {
     app.parse(argc, argv);

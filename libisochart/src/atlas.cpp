@@ -19,6 +19,7 @@
 #include "isochart/geodesic.h"
 #include "isochart/stretch.h"
 #include "partition.h"
+#include "signal_distance.h"
 #include "isochart/rng.h"
 
 namespace isochart {
@@ -81,6 +82,8 @@ class Builder {
     param_.max_l2 = o.max_l2;
     param_.max_linf = o.max_linf;
     param_.optimize_passes = o.optimize_passes;
+    if (!o.face_metric.empty()) param_.face_metric = &o.face_metric;
+    param_.max_geometric_l2 = o.max_geometric_l2;
     component_vertices_.assign(topo_.num_components(), 0);
     std::vector<int> seen(mesh.num_vertices(), 0);
     for (int f = 0; f < mesh.num_faces(); ++f)
@@ -202,6 +205,8 @@ class Builder {
     if (disk_like && !force_split && try_accept(g, topo, detail::isomap_uv(emb), po, out)) return out;
     // Split (§5).
     auto t0 = Clock::now();
+    if (!o_.vertex_signal.empty() && o_.signal_beta < 1)
+      emb = detail::combined_embedding(g, emb, o_.vertex_signal, o_.signal_dimension, o_.signal_beta);
     detail::SplitKind kind;
     int m = 0;
     detail::SplitOptions so = split_;
@@ -406,6 +411,7 @@ class Builder {
   // uncut chart's embedding is a valid start for the slit chart too.
   bool try_accept(const detail::ChartGeometry& g, const Topology& topo, const std::vector<Vec2d>& start_uv,
                   const detail::ParamOptions& po, Outcome& out) const {
+    if (signal_too_uneven(g)) return false;
     detail::ChartGeometry cg = g;
     std::vector<int> origin;
     if (!detail::cut_to_disk(cg, &origin, &topo)) return false;
@@ -441,6 +447,24 @@ class Builder {
     detail::ChartParam q = detail::parameterize(sg, detail::isomap_uv(se), po);
     out.times.optimization += q.optimize_seconds;
     return q.accepted && accept(sg, q);
+  }
+
+  // Signal-specialized charts (§7): a large chart whose signal density varies so much that a
+  // single texel density wastes most of what an ideal allocation would gain is split.
+  bool signal_too_uneven(const detail::ChartGeometry& g) const {
+    if (o_.face_metric.empty() || !(o_.signal_split_efficiency > 0)) return false;
+    if (g.num_faces() * 100 <= mesh_.num_faces()) return false;
+    double area = 0, sqrt_sum = 0, m_sum = 0;
+    for (size_t f = 0; f < g.tris.size(); ++f) {
+      const Face& t = g.tris[f];
+      const double a = triangle_area(g.positions[t[0]], g.positions[t[1]], g.positions[t[2]]);
+      const auto& G = o_.face_metric[g.faces[f]];
+      const double m = std::max(0.5 * (G[0] + G[2]) - 1.0, 0.0);
+      area += a;
+      sqrt_sum += a * std::sqrt(m);
+      m_sum += a * m;
+    }
+    return m_sum > 0 && area > 0 && sqrt_sum * sqrt_sum / area < o_.signal_split_efficiency * m_sum;
   }
 
   Atlas assemble(const std::vector<DoneChart>& charts) const {
@@ -496,6 +520,8 @@ void validate_options(const AtlasOptions& o) {
   if (o.pack.width < 8 || o.pack.height < 8 || o.pack.width > 65536 || o.pack.height > 65536)
     bad("--width and --height must be between 8 and 65536 texels");
   if (o.pack.gutter < 0 || o.pack.gutter > 64) bad("--gutter must be between 0 and 64 texels");
+  if (!(o.max_geometric_l2 >= 1.0) || !std::isfinite(o.max_geometric_l2))
+    bad("the geometric L2 bound of a signal atlas must be a number >= 1");
 }
 
 Mesh Atlas::apply_to(const Mesh& mesh) const {
@@ -547,6 +573,13 @@ PackResult pack_atlas(const Mesh& mesh, Atlas& atlas, const PackOptions& options
 Atlas build_atlas(const Mesh& mesh, const AtlasOptions& options, const Progress& progress) {
   validate_options(options);
   if (mesh.faces.empty()) throw InputError("", "mesh has no faces");
+  if (!options.vertex_signal.empty() &&
+      (options.signal_dimension < 1 ||
+       options.vertex_signal.size() != static_cast<size_t>(mesh.num_vertices()) * options.signal_dimension))
+    throw InputError("", "vertex signal does not match the mesh's " + std::to_string(mesh.num_vertices()) + " vertices");
+  if (!options.face_metric.empty() && static_cast<int>(options.face_metric.size()) != mesh.num_faces())
+    throw InputError("", "signal metric has " + std::to_string(options.face_metric.size()) +
+                             " faces, the mesh has " + std::to_string(mesh.num_faces()));
   Builder b(mesh, options, progress);
   return b.run();
 }

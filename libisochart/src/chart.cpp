@@ -13,6 +13,7 @@
 #include "isochart/embedding.h"
 #include "isochart/geodesic.h"
 #include "isochart/optimize.h"
+#include "isochart/signal.h"
 #include "isochart/stretch.h"
 
 namespace isochart::detail {
@@ -305,20 +306,34 @@ bool lscm(const ChartGeometry& g, std::vector<Vec2d>& uv) {
   return true;
 }
 
+std::vector<std::array<double, 3>> chart_metric(const ChartGeometry& g,
+                                                const std::vector<std::array<double, 3>>& parent) {
+  std::vector<std::array<double, 3>> m(g.faces.size());
+  for (size_t f = 0; f < g.faces.size(); ++f) m[f] = parent[g.faces[f]];
+  return m;
+}
+
 void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o) {
   const StretchStats st = measure_stretch(g.positions, g.tris, p.uv);
   p.l2 = st.l2;
+  p.geometric_l2 = st.l2;
   p.linf = st.linf;
   p.flipped = st.flipped;
   p.overlaps = false;
+  bool geometric_ok = true;
+  if (o.face_metric) {
+    // Signal-specialized (§7): the signal-metric L2 decides, the geometric L2 only guards.
+    p.l2 = metric_l2_stretch(g.positions, g.tris, p.uv, chart_metric(g, *o.face_metric));
+    geometric_ok = st.l2 <= o.max_geometric_l2;
+  }
   // The exact overlap test is the expensive part: only charts that meet the bounds need it.
-  if (st.flipped == 0 && st.l2 <= o.max_l2 && st.linf <= o.max_linf) {
+  if (st.flipped == 0 && p.l2 <= o.max_l2 && st.linf <= o.max_linf && geometric_ok) {
     std::vector<std::array<Vec2d, 3>> tris(g.tris.size());
     for (size_t f = 0; f < g.tris.size(); ++f)
       for (int k = 0; k < 3; ++k) tris[f][k] = p.uv[g.tris[f][k]];
     p.overlaps = !overlapping_uv_pairs(tris, 1).empty();
   }
-  p.accepted = st.flipped == 0 && !p.overlaps && st.l2 <= o.max_l2 && st.linf <= o.max_linf;
+  p.accepted = st.flipped == 0 && !p.overlaps && p.l2 <= o.max_l2 && st.linf <= o.max_linf && geometric_ok;
 }
 
 namespace {
@@ -408,6 +423,7 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
   // §6: only vertices whose 1-ring exceeds the user's limit are optimized.
   opt.vertex_l2_threshold = o.max_l2;
   opt.give_up_l2 = o.max_l2;
+  if (o.face_metric) opt.face_metric = chart_metric(g, *o.face_metric);
   double seconds = 0;
   auto attempt = [&](std::vector<Vec2d> uv, const char* method) {
     ChartParam p;

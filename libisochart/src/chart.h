@@ -1,6 +1,7 @@
 #pragma once
 // Internal: one chart's geometry, parameterization and acceptance test (Iso-charts §3, §6).
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -68,11 +69,16 @@ struct ParamOptions {
   /// ... or whenever the given start fails: for starts that say nothing about the chart's
   /// shape (two merged parameterizations aligned by a similarity), unlike an IsoMap start.
   bool lscm_on_any_failure = false;
+  /// Signal metric per parent face (AtlasOptions::face_metric), or null: the chart's L2 is
+  /// then measured in it, and its geometric L2 must still meet max_geometric_l2.
+  const std::vector<std::array<double, 3>>* face_metric = nullptr;
+  double max_geometric_l2 = 2.0;
 };
 
 struct ChartParam {
   std::vector<Vec2d> uv;  ///< per chart vertex; empty when no valid map was found
-  double l2 = 0, linf = 0;
+  double l2 = 0, linf = 0;  ///< l2 in the signal metric when ParamOptions::face_metric is set
+  double geometric_l2 = 0;
   int flipped = 0;
   bool overlaps = false;
   bool accepted = false;

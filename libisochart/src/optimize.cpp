@@ -4,7 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <string>
 
+#include "isochart/error.h"
 #include "isochart/rng.h"
 
 namespace isochart {
@@ -35,7 +37,8 @@ FlatTriangle flatten(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
 // Metric tensor entries of the texture → surface map: a = Ss·Ss, b = Ss·St, c = St·St.
 // Returns false for flipped or degenerate texture triangles.
 inline bool metric(const FlatTriangle& q, const Vec2d& p0, const Vec2d& p1, const Vec2d& p2, double& a,
-                   double& b, double& c, double& area2d) {
+                   double& b, double& c, double& area2d, const std::array<double, 3>* g = nullptr,
+                   double* trace = nullptr) {
   const double d = (p1.x - p0.x) * (p2.y - p0.y) - (p2.x - p0.x) * (p1.y - p0.y);
   area2d = 0.5 * d;
   if (!(d > 0)) return false;
@@ -48,6 +51,11 @@ inline bool metric(const FlatTriangle& q, const Vec2d& p0, const Vec2d& p1, cons
   a = ssx * ssx + ssy * ssy;
   b = ssx * stx + ssy * sty;
   c = stx * stx + sty * sty;
+  // tr(Jᵀ G J) = tr(G J Jᵀ) for the signal metric G.
+  if (trace)
+    *trace = g ? (*g)[0] * (ssx * ssx + stx * stx) + 2 * (*g)[1] * (ssx * ssy + stx * sty) +
+                     (*g)[2] * (ssy * ssy + sty * sty)
+               : a + c;
   return true;
 }
 
@@ -73,6 +81,14 @@ class Optimizer {
     topo_ = Topology(faces, static_cast<int>(uv.size()));
     area3_ = 0;
     for (const auto& t : flat_) area3_ += t.area;
+    marea_ = area3_;
+    if (!o.face_metric.empty()) {
+      marea_ = 0;
+      for (int f = 0; f < nf; ++f) {
+        const auto& g = o.face_metric[f];
+        marea_ += flat_[f].area * std::sqrt(std::max(g[0] * g[2] - g[1] * g[1], 0.0));
+      }
+    }
     tau_ = o.linf_margin * o.max_linf;
     init_boundary();
     recompute_sums();
@@ -80,7 +96,7 @@ class Optimizer {
 
   bool valid() const { return valid_; }
 
-  double current_l2() const { return area3_ > 0 ? std::sqrt(s1_ * s2_) / area3_ : 0.0; }
+  double current_l2() const { return marea_ > 0 ? std::sqrt(s1_ * s2_) / marea_ : 0.0; }
 
   OptimizeResult run() {
     OptimizeResult r;
@@ -122,16 +138,17 @@ class Optimizer {
     valid_ = true;
     const int nf = static_cast<int>(faces_.size());
     for (int f = 0; f < nf; ++f) {
-      double a, b, c, ar;
+      double a, b, c, ar, tr;
       const Face& F = faces_[f];
-      if (!metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar)) {
+      if (!metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar, face_g(f), &tr)) {
         valid_ = false;
         continue;
       }
       s2_ += ar;
-      if (flat_[f].area > 0) s1_ += flat_[f].area * 0.5 * (a + c);
+      if (flat_[f].area > 0) s1_ += flat_[f].area * 0.5 * tr;
     }
     k2_ = area3_ > 0 ? s2_ / area3_ : 1.0;
+    k2m_ = marea_ > 0 ? s2_ / marea_ : 1.0;
     // The penalty depends on the chart-wide normalization, so it needs k2 first.
     for (int f = 0; f < nf; ++f) {
       double a, b, c, ar;
@@ -148,14 +165,14 @@ class Optimizer {
     linf = 0;
     for (int f : topo_.vertex_faces(v)) {
       const Face& F = faces_[f];
-      double a, b, c, ar;
+      double a, b, c, ar, tr;
       if (flat_[f].area <= 0) continue;
-      if (!metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar)) {
+      if (!metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar, face_g(f), &tr)) {
         linf = kInf;
         continue;
       }
-      num += flat_[f].area * 0.5 * (a + c) * k2_;
-      den += flat_[f].area;
+      num += flat_[f].area * 0.5 * tr * k2m_;
+      den += flat_[f].area * metric_weight(f);
       linf = std::max(linf, linf_of(a, b, c, k2_));
     }
     l2 = den > 0 ? std::sqrt(num / den) : 0;
@@ -176,8 +193,9 @@ class Optimizer {
         s2 += signed_area(p0, p1, p2);
         continue;
       }
-      if (!metric(flat_[f], p0, p1, p2, a, b, c, ar)) return false;
-      s1 += flat_[f].area * 0.5 * (a + c);
+      double tr;
+      if (!metric(flat_[f], p0, p1, p2, a, b, c, ar, face_g(f), &tr)) return false;
+      s1 += flat_[f].area * 0.5 * tr;
       s2 += ar;
       const double li = linf_of(a, b, c, k2_);
       if (li > tau_) pen += flat_[f].area * (li - tau_) * (li - tau_);
@@ -188,7 +206,17 @@ class Optimizer {
   // Global objective if the ring sums (s1, s2, pen) replaced the current ones (r1, r2, rpen).
   double objective(double s1, double s2, double pen, double r1, double r2, double rpen) const {
     const double S1 = s1_ - r1 + s1, S2 = s2_ - r2 + s2;
-    return S1 * S2 / (area3_ * area3_) + o_.linf_weight * (pen_ - rpen + pen) / area3_;
+    return S1 * S2 / (marea_ * marea_) + o_.linf_weight * (pen_ - rpen + pen) / area3_;
+  }
+
+  const std::array<double, 3>* face_g(int f) const {
+    return o_.face_metric.empty() ? nullptr : &o_.face_metric[f];
+  }
+  // Metric area per unit surface area of face f (1 without a signal metric).
+  double metric_weight(int f) const {
+    if (o_.face_metric.empty()) return 1.0;
+    const auto& g = o_.face_metric[f];
+    return std::sqrt(std::max(g[0] * g[2] - g[1] * g[1], 0.0));
   }
 
   // Extent [lo, hi] of the line x0 + t d keeping every ring triangle counter-clockwise.
@@ -413,6 +441,7 @@ class Optimizer {
   std::vector<FlatTriangle> flat_;
   Topology topo_;
   double area3_ = 0, s1_ = 0, s2_ = 0, pen_ = 0, k2_ = 1, tau_ = 0;
+  double marea_ = 0, k2m_ = 1;  // metric area and UV area / metric area (signal metric)
   bool valid_ = true;
   std::vector<int> bprev_, bnext_;
   std::vector<std::vector<int>> grid_;
@@ -503,6 +532,9 @@ int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, int max_pas
 OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
                                 std::vector<Vec2d>& uv, const OptimizeOptions& options) {
   OptimizeResult r;
+  if (!options.face_metric.empty() && options.face_metric.size() != faces.size())
+    throw Error("optimize_stretch: face_metric has " + std::to_string(options.face_metric.size()) +
+                " entries for " + std::to_string(faces.size()) + " faces");
   r.before = measure_stretch(positions, faces, uv);
   Optimizer opt(positions, faces, uv, options);
   if (opt.valid()) {

@@ -3,6 +3,7 @@
 /// by spectral analysis of geodesic distances, graph-cut chart boundaries, stretch-optimized
 /// parameterization, merging of small charts, and packing.
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -46,6 +47,25 @@ struct AtlasOptions {
   std::uint64_t seed = 1;
   /// Packing (§6): texture size, gutter, rotations.
   PackOptions pack;
+  /// Signal-specialized charts (§7; see signal.h, which fills this): #F metric tensors
+  /// (g00, g01, g11) per unit surface area in each face's frame (x along corner 0 → 1). When
+  /// given, charts are split, merged and parameterized by their L2 stretch in this metric
+  /// (bound max_l2), and must also meet max_geometric_l2 and max_linf geometrically. Empty:
+  /// the geometric method.
+  std::vector<std::array<double, 3>> face_metric;
+  /// Geometric L2 bound kept with face_metric (normalized, 1 = isometric).
+  double max_geometric_l2 = 2.0;
+  /// With face_metric: a chart of more than 1% of the mesh's faces is split when the signal
+  /// energy of its best texel allocation, (Σ A·√m)²/A, is below this fraction of the energy of
+  /// a uniform one, Σ A·m (m = tr(G)/2 − 1, the signal part of the metric): its signal is too
+  /// uneven for one texel density (signal stretch as splitting criterion, §7). 0 = off.
+  double signal_split_efficiency = 0;
+  /// Signal per vertex (#V × signal_dimension) for the combined distance of §7 eq. 6 in the
+  /// spectral analysis and graph cut of chart splitting, with weight `signal_beta` on the
+  /// geodesic part (1 = geodesic only). Empty: geodesic distances.
+  std::vector<double> vertex_signal;
+  int signal_dimension = 0;
+  double signal_beta = 1.0;
 };
 
 /// One chart of the atlas.

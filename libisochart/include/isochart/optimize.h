@@ -1,6 +1,7 @@
 #pragma once
 /// Stretch optimization of one chart's parameterization (Sander et al. 2001; Iso-charts §6).
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -36,6 +37,11 @@ struct OptimizeOptions {
   /// if every remaining sweep gained as much as the last one is compared with it. 0 = never.
   double give_up_l2 = 0;
   std::uint64_t seed = 1;
+  /// Signal-specialized metric (Sander et al. 2002; Iso-charts §7): #F symmetric tensors
+  /// (g00, g01, g11) per unit surface area, in each face's own frame (x along corner 0 → 1,
+  /// y towards corner 2). The L2 term becomes Σ A·tr(Jᵀ G J)/2 normalized by the metric area
+  /// Σ A·sqrt(det G); the Linf term stays geometric so no triangle degenerates. Empty: G = I.
+  std::vector<std::array<double, 3>> face_metric;
 };
 
 struct OptimizeResult {

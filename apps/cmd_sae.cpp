@@ -1,0 +1,105 @@
+// `isocharts sae MESH_WITH_UV --signal normals --res 256`: the signal approximation error of an
+// atlas (Iso-charts §9.3).
+
+#include <cmath>
+#include <sstream>
+
+#include "cli.h"
+#include "isochart/error.h"
+#include "isochart/image.h"
+#include "isochart/signal.h"
+
+namespace cli {
+
+namespace {
+
+struct SaeArgs {
+  std::string input;
+  std::string signal = "normals";
+  std::string source;
+  int res = 256;
+  int width = 0;
+  int height = 0;
+  std::string texture_out;
+  std::string imt_out;
+};
+
+// Normals in [-1, 1] become displayable colours; colours and textures are written as they are.
+isochart::Image displayable(const isochart::Image& img, bool signed_values) {
+  isochart::Image out = img;
+  if (signed_values)
+    for (auto& v : out.pixels) v = 0.5f * v + 0.5f;
+  return out;
+}
+
+void run_sae(const Context& ctx, const SaeArgs& a) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const int width = a.width > 0 ? a.width : a.res;
+  const int height = a.height > 0 ? a.height : a.res;
+  isochart::Mesh mesh = ctx.load(a.input).mesh;
+  if (!mesh.has_uvs())
+    throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
+  // The signal lives on the source mesh (same vertices and faces) when one is given: e.g. its
+  // vertex colours, or a texture through its original texture coordinates.
+  isochart::Signal signal;
+  if (!a.source.empty()) {
+    const isochart::Mesh src = ctx.load(a.source).mesh;
+    if (src.num_vertices() != mesh.num_vertices() || src.num_faces() != mesh.num_faces())
+      throw isochart::InputError(a.source, "has " + std::to_string(src.num_vertices()) + " vertices and " +
+                                               std::to_string(src.num_faces()) + " faces, the atlas " +
+                                               std::to_string(mesh.num_vertices()) + " and " +
+                                               std::to_string(mesh.num_faces()));
+    signal = isochart::make_signal(src, a.signal, a.source);
+  } else {
+    signal = isochart::make_signal(mesh, a.signal, a.input);
+  }
+  isochart::Image baked;
+  const isochart::SaeResult r = isochart::signal_approximation_error(mesh, signal, width, height, &baked);
+  const std::vector<isochart::Imt> imt = isochart::face_imt(mesh, signal);
+  const double sst = isochart::signal_stretch(mesh, imt);
+  if (!a.texture_out.empty()) isochart::write_image(a.texture_out, displayable(baked, a.signal == "normals"));
+  if (!a.imt_out.empty()) isochart::write_imt(a.imt_out, imt);
+
+  nlohmann::json j;
+  j["file"] = a.input;
+  j["signal"] = a.signal;
+  j["width"] = width;
+  j["height"] = height;
+  j["sae"] = r.sae;
+  j["signal_rms"] = r.signal_rms;
+  j["signal_stretch"] = std::isfinite(sst) ? nlohmann::json(sst) : nlohmann::json();
+  j["samples"] = r.samples;
+  if (!a.texture_out.empty()) j["texture"] = a.texture_out;
+  if (!a.imt_out.empty()) j["imt"] = a.imt_out;
+  j["seconds"] = {{"sae", r.seconds}, {"total", seconds_since(t0)}};
+  std::ostringstream t;
+  t << a.input << ": SAE " << r.sae << " at " << width << "x" << height << " (signal rms " << r.signal_rms
+    << ", signal stretch " << sst << ")\n";
+  if (!a.texture_out.empty()) t << "  wrote " << a.texture_out << "\n";
+  if (!a.imt_out.empty()) t << "  wrote " << a.imt_out << "\n";
+  ctx.emit(j, t.str());
+}
+
+}  // namespace
+
+void add_sae(CLI::App& app, Context& ctx, Action& action) {
+  auto args = std::make_shared<SaeArgs>();
+  CLI::App* sub = app.add_subcommand("sae", "Signal approximation error of an atlas (a mesh with UVs)");
+  sub->add_option("input", args->input, "Mesh with texture coordinates (OBJ/PLY/glTF)")->required();
+  sub->add_option("--signal", args->signal, "normals, colors, or texture:IMG (mapped through --source's UVs)")
+      ->capture_default_str();
+  sub->add_option(
+      "--source", args->source,
+      "Mesh carrying the signal (same vertices and faces), e.g. the original with its colours or UVs");
+  sub->add_option("--res", args->res, "Texture size in texels (square)")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
+  sub->add_option("--width", args->width, "Texture width (overrides --res)")->check(CLI::Range(1, 16384));
+  sub->add_option("--height", args->height, "Texture height (overrides --res)")->check(CLI::Range(1, 16384));
+  sub->add_option("--texture-out", args->texture_out, "Write the baked signal texture (normals as 0.5n+0.5)");
+  sub->add_option("--imt-out", args->imt_out, "Write the per-face IMT (g00 g01 g11 per line)");
+  sub->footer("Example: isocharts sae bunny_atlas.obj --signal normals --res 256 --json");
+  sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_sae(ctx, *args); }; });
+}
+
+}  // namespace cli

@@ -1,0 +1,223 @@
+// Baking a signal into an atlas texture and the signal approximation error (Iso-charts §9.3;
+// Sander et al. 2002 §5).
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "isochart/error.h"
+#include "isochart/signal.h"
+
+namespace isochart {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Texel-space position of a texture coordinate: x to the right, y down from the top row.
+Vec2d to_texel(const Vec2d& uv, int w, int h) {
+  return {uv.x * w, (1.0 - uv.y) * h};
+}
+
+// Closest point of segment ab to p, as the parameter along ab.
+double segment_param(const Vec2d& a, const Vec2d& b, const Vec2d& p) {
+  const Vec2d d = b - a;
+  const double l2 = squared_norm(d);
+  return l2 > 0 ? std::clamp(dot(p - a, d) / l2, 0.0, 1.0) : 0.0;
+}
+
+// Closest point of triangle (t0, t1, t2) to p: its barycentrics (b1, b2) and distance.
+double closest_point(const Vec2d t[3], const Vec2d& p, double& b1, double& b2) {
+  const double area = cross(t[1] - t[0], t[2] - t[0]);
+  if (std::abs(area) > 0) {
+    const double l1 = cross(p - t[0], t[2] - t[0]) / area;
+    const double l2 = cross(t[1] - t[0], p - t[0]) / area;
+    if (l1 >= 0 && l2 >= 0 && l1 + l2 <= 1) {
+      b1 = l1;
+      b2 = l2;
+      return 0;
+    }
+  }
+  double best = kInf;
+  for (int k = 0; k < 3; ++k) {
+    const Vec2d& a = t[k];
+    const Vec2d& b = t[(k + 1) % 3];
+    const double s = segment_param(a, b, p);
+    const double d = norm(a + (b - a) * s - p);
+    if (d < best) {
+      best = d;
+      double bc[3] = {0, 0, 0};
+      bc[k] = 1 - s;
+      bc[(k + 1) % 3] = s;
+      b1 = bc[1];
+      b2 = bc[2];
+    }
+  }
+  return best;
+}
+
+void check_size(int w, int h) {
+  if (w < 1 || h < 1 || w > 16384 || h > 16384)
+    throw InputError("", "texture size " + std::to_string(w) + "x" + std::to_string(h) +
+                             " is out of range (1..16384 per side)");
+}
+
+}  // namespace
+
+Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height) {
+  if (!mesh.has_uvs()) throw InputError("", "cannot bake a signal: mesh has no texture coordinates");
+  check_size(width, height);
+  if (signal.dimension < 1 || signal.dimension > 16)
+    throw InputError("", "signal must have 1 to 16 channels");
+  if (static_cast<int>(mesh.face_uvs.size()) != mesh.num_faces())
+    throw InputError("", "cannot bake a signal: texture coordinates for " +
+                             std::to_string(mesh.face_uvs.size()) + " faces, the mesh has " +
+                             std::to_string(mesh.num_faces()));
+  if (!signal.is_mapped() &&
+      signal.vertex_values.size() != static_cast<size_t>(mesh.num_vertices()) * signal.dimension)
+    throw InputError("", "signal has values for " +
+                             std::to_string(signal.vertex_values.size() / signal.dimension) +
+                             " vertices, the mesh has " + std::to_string(mesh.num_vertices()));
+  if (signal.is_mapped() && static_cast<int>(signal.face_uvs.size()) != mesh.num_faces())
+    throw InputError("", "mapped signal has texture coordinates for " +
+                             std::to_string(signal.face_uvs.size()) + " faces, the mesh has " +
+                             std::to_string(mesh.num_faces()));
+  const int dim = signal.dimension;
+  Image img(width, height, dim, 0.0f);
+  const size_t n = static_cast<size_t>(width) * height;
+  std::vector<double> dist(n, kInf);
+  // Texels near a chart take the signal at the nearest point of the nearest triangle, so a
+  // bilinear lookup anywhere inside the chart only mixes the chart's own signal.
+  constexpr double kReach = 1.5;
+  std::vector<double> value(dim);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    Vec2d t[3];
+    for (int k = 0; k < 3; ++k) t[k] = to_texel(mesh.uvs[mesh.face_uvs[f][k]], width, height);
+    if (!is_finite(t[0]) || !is_finite(t[1]) || !is_finite(t[2])) continue;
+    const double lo_x = std::min({t[0].x, t[1].x, t[2].x}) - kReach,
+                 hi_x = std::max({t[0].x, t[1].x, t[2].x}) + kReach;
+    const double lo_y = std::min({t[0].y, t[1].y, t[2].y}) - kReach,
+                 hi_y = std::max({t[0].y, t[1].y, t[2].y}) + kReach;
+    const int x0 = std::max(0, static_cast<int>(std::floor(lo_x - 0.5)));
+    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(hi_x - 0.5)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(lo_y - 0.5)));
+    const int y1 = std::min(height - 1, static_cast<int>(std::ceil(hi_y - 0.5)));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        double b1 = 0, b2 = 0;
+        const double d = closest_point(t, {x + 0.5, y + 0.5}, b1, b2);
+        const size_t i = static_cast<size_t>(y) * width + x;
+        if (d > kReach || !(d < dist[i])) continue;
+        dist[i] = d;
+        signal.evaluate(mesh, f, b1, b2, value.data());
+        for (int c = 0; c < dim; ++c) img.pixels[i * dim + c] = static_cast<float>(value[c]);
+      }
+  }
+  // The rest of the gutter: breadth-first dilation, each new texel the mean of its filled
+  // 8-neighbours from earlier layers.
+  std::vector<char> filled(n), queued(n, 0);
+  for (size_t i = 0; i < n; ++i) filled[i] = dist[i] < kInf;
+  std::vector<int> layer;
+  auto enqueue_neighbours = [&](size_t i) {
+    const int x = static_cast<int>(i % width), y = static_cast<int>(i / width);
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = x + dx, ny = y + dy;
+        if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+        const size_t j = static_cast<size_t>(ny) * width + nx;
+        if (!filled[j] && !queued[j]) {
+          queued[j] = 1;
+          layer.push_back(static_cast<int>(j));
+        }
+      }
+  };
+  for (size_t i = 0; i < n; ++i)
+    if (filled[i]) enqueue_neighbours(i);
+  std::vector<float> sum(dim);
+  while (!layer.empty()) {
+    std::sort(layer.begin(), layer.end());
+    const std::vector<int> current = std::move(layer);
+    layer.clear();
+    for (int i : current) {
+      const int x = i % width, y = i / width;
+      std::fill(sum.begin(), sum.end(), 0.0f);
+      int count = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = x + dx, ny = y + dy;
+          if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+          const size_t j = static_cast<size_t>(ny) * width + nx;
+          if (!filled[j]) continue;
+          for (int c = 0; c < dim; ++c) sum[c] += img.pixels[j * dim + c];
+          ++count;
+        }
+      for (int c = 0; c < dim; ++c)
+        img.pixels[static_cast<size_t>(i) * dim + c] = count ? sum[c] / count : 0.0f;
+    }
+    for (int i : current) filled[i] = 1;
+    for (int i : current) enqueue_neighbours(static_cast<size_t>(i));
+  }
+  return img;
+}
+
+SaeResult signal_approximation_error(const Mesh& mesh, const Signal& signal, int width, int height,
+                                     Image* baked) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Image img = bake_signal(mesh, signal, width, height);
+  const int dim = signal.dimension;
+  std::vector<double> truth(dim), sum(dim, 0.0);
+  float rec[16];
+  double err = 0, sq = 0, total = 0;
+  long long samples = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Face& F = mesh.faces[f];
+    const double area = triangle_area(mesh.positions[F[0]], mesh.positions[F[1]], mesh.positions[F[2]]);
+    if (!(area > 0)) continue;
+    const Vec2d u[3] = {mesh.uvs[mesh.face_uvs[f][0]], mesh.uvs[mesh.face_uvs[f][1]],
+                        mesh.uvs[mesh.face_uvs[f][2]]};
+    double extent = 0;
+    for (int k = 0; k < 3; ++k) {
+      const Vec2d d = u[(k + 1) % 3] - u[k];
+      extent = std::max({extent, std::abs(d.x) * width, std::abs(d.y) * height});
+    }
+    // Sub-triangles of at most half a texel: the midpoint rule then resolves the bilinear
+    // reconstruction's variation.
+    const int n = std::clamp(static_cast<int>(std::ceil(2 * extent)), 1, 64);
+    const double w = area / (static_cast<double>(n) * n);
+    auto sample = [&](double b1, double b2) {
+      signal.evaluate(mesh, f, b1, b2, truth.data());
+      const Vec2d uv = u[0] * (1 - b1 - b2) + u[1] * b1 + u[2] * b2;
+      sample_bilinear(img, uv.x, uv.y, rec, Wrap::Clamp);
+      double d2 = 0;
+      for (int c = 0; c < dim; ++c) {
+        const double d = truth[c] - rec[c];
+        d2 += d * d;
+        sum[c] += w * truth[c];
+        sq += w * truth[c] * truth[c];
+      }
+      err += w * d2;
+      total += w;
+      ++samples;
+    };
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; i + j < n; ++j) {
+        sample((i + 1.0 / 3) / n, (j + 1.0 / 3) / n);
+        if (i + j + 1 < n) sample((i + 2.0 / 3) / n, (j + 2.0 / 3) / n);
+      }
+  }
+  SaeResult r;
+  r.samples = samples;
+  if (total > 0) {
+    r.sae = std::sqrt(err / total);
+    double mean2 = 0;
+    for (int c = 0; c < dim; ++c) mean2 += (sum[c] / total) * (sum[c] / total);
+    r.signal_rms = std::sqrt(std::max(sq / total - mean2, 0.0));
+  }
+  if (baked) *baked = img;
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+}  // namespace isochart

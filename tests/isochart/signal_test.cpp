@@ -1,0 +1,282 @@
+#include "isochart/signal.h"
+
+#include <sys/wait.h>
+#include <tbb/global_control.h>
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "isochart/builtin.h"
+#include "isochart/error.h"
+#include "isochart/stretch.h"
+
+using namespace isochart;
+
+namespace {
+
+// An n × n grid over [0,1]² in the plane z = 0, with uv = (x, y) as its atlas.
+Mesh plane(int n) {
+  Mesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.positions.push_back({double(i) / n, double(j) / n, 0});
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      m.faces.push_back({a, b, d});
+      m.faces.push_back({a, d, c});
+    }
+  for (const auto& p : m.positions) m.uvs.push_back({p.x, p.y});
+  m.face_uvs = m.faces;
+  return m;
+}
+
+Signal scalar_signal(const Mesh& m, double (*f)(double, double)) {
+  Signal s;
+  s.dimension = 1;
+  for (const auto& p : m.positions) s.vertex_values.push_back(f(p.x, p.y));
+  return s;
+}
+
+double linear(double x, double y) {
+  return 2 * x + 3 * y;
+}
+double wave(double x, double y) {
+  return std::sin(6 * x) * std::cos(5 * y);
+}
+
+}  // namespace
+
+TEST_CASE("IMT of a linear signal on a plane is exact", "[signal]") {
+  const Mesh m = plane(4);
+  const std::vector<Imt> imt = face_imt(m, scalar_signal(m, linear));
+  const std::vector<double> area = face_areas(m);
+  REQUIRE(imt.size() == m.faces.size());
+  for (size_t f = 0; f < imt.size(); ++f) {
+    // The gradient (2, 3) has |∇f|² = 13 whatever the face frame, and rank 1.
+    CHECK(imt[f][0] + imt[f][2] == Approx(13 * area[f]).epsilon(1e-12));
+    CHECK(imt[f][0] * imt[f][2] - imt[f][1] * imt[f][1] == Approx(0).margin(1e-12));
+  }
+  // Face 0 = (a, b, d): corner 0 → 1 along +x, corner 2 above, so the frame is the world's.
+  CHECK(imt[0][0] == Approx(4 * area[0]));
+  CHECK(imt[0][1] == Approx(6 * area[0]));
+  CHECK(imt[0][2] == Approx(9 * area[0]));
+}
+
+TEST_CASE("IMT of a mapped ramp texture matches its gradient", "[signal]") {
+  Mesh m = plane(3);
+  // A texture ramp in u: texel centres hold u, so bilinear lookup is exactly u inside.
+  Image ramp(64, 8, 1);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 64; ++x) ramp.at(x, y, 0) = static_cast<float>((x + 0.5) / 64);
+  for (auto& uv : m.uvs) uv = {0.1 + 0.5 * uv.x, 0.2 + 0.5 * uv.y};
+  Signal s;
+  s.dimension = 1;
+  s.texture = ramp;
+  s.uvs = m.uvs;
+  s.face_uvs = m.face_uvs;
+  const std::vector<Imt> imt = face_imt(m, s);
+  const std::vector<double> area = face_areas(m);
+  for (size_t f = 0; f < imt.size(); ++f) {
+    // f = 0.1 + 0.5 x on the surface: |∇f|² = 0.25.
+    CHECK(imt[f][0] + imt[f][2] == Approx(0.25 * area[f]).epsilon(1e-4));
+  }
+}
+
+TEST_CASE("signal stretch is 1 for an isometry and lower when texels follow the signal", "[signal]") {
+  Mesh m = plane(16);
+  // Signal varying only for x > 0.5.
+  const Signal s =
+      scalar_signal(m, [](double x, double) { return x > 0.5 ? 4 * (x - 0.5) * (x - 0.5) * 10 : 0.0; });
+  const std::vector<Imt> imt = face_imt(m, s);
+  CHECK(signal_stretch(m, imt) == Approx(1.0).epsilon(1e-9));
+  // Give the right half twice the texture width.
+  Mesh warped = m;
+  for (auto& uv : warped.uvs) uv.x = uv.x <= 0.5 ? uv.x * 0.5 : 0.25 + (uv.x - 0.5) * 1.5;
+  CHECK(signal_stretch(warped, imt) < 0.95);
+  // The opposite allocation is worse than the isometry.
+  Mesh bad = m;
+  for (auto& uv : bad.uvs) uv.x = uv.x <= 0.5 ? uv.x * 1.5 : 0.75 + (uv.x - 0.5) * 0.5;
+  CHECK(signal_stretch(bad, imt) > 1.05);
+  // A flipped triangle makes it infinite.
+  Mesh flipped = m;
+  std::swap(flipped.face_uvs[0][1], flipped.face_uvs[0][2]);
+  CHECK(std::isinf(signal_stretch(flipped, imt)));
+}
+
+TEST_CASE("metric L2 stretch equals geometric L2 stretch for the identity metric", "[signal]") {
+  Mesh m = plane(6);
+  for (auto& uv : m.uvs) uv = {uv.x * (1 + 0.3 * uv.y), uv.y};
+  const std::vector<Imt> identity(m.faces.size(), Imt{1, 0, 1});
+  std::vector<Vec2d> uv = m.uvs;
+  CHECK(metric_l2_stretch(m.positions, m.faces, uv, identity) ==
+        Approx(measure_stretch(m.positions, m.faces, uv).l2).epsilon(1e-12));
+  // signal_metric with λ = 0 is the identity.
+  const std::vector<Imt> g = signal_metric(m, face_imt(m, scalar_signal(m, wave)), 0.0);
+  for (const Imt& t : g) CHECK((t[0] == 1 && t[1] == 0 && t[2] == 1));
+}
+
+TEST_CASE("SAE is tiny for a linear signal and decreases with resolution", "[signal]") {
+  // Inset from the texture border, as an atlas with a gutter is (lookups clamp there).
+  Mesh m = plane(32);
+  for (auto& uv : m.uvs) uv = {0.1 + 0.8 * uv.x, 0.1 + 0.8 * uv.y};
+  // A linear signal is reproduced exactly by bilinear interpolation of exact texel values.
+  const SaeResult lin = signal_approximation_error(m, scalar_signal(m, linear), 64, 64);
+  CHECK(lin.signal_rms > 0.5);
+  CHECK(lin.sae < 1e-5);
+  const Signal s = scalar_signal(m, wave);
+  const double e16 = signal_approximation_error(m, s, 16, 16).sae;
+  const double e64 = signal_approximation_error(m, s, 64, 64).sae;
+  const SaeResult r256 = signal_approximation_error(m, s, 256, 256);
+  CHECK(e16 > e64);
+  CHECK(e64 > r256.sae);
+  CHECK(r256.sae < 0.02 * r256.signal_rms);
+  CHECK(r256.samples > 32 * 32 * 2);
+}
+
+TEST_CASE("bake_signal fills the gutter", "[signal]") {
+  Mesh m = plane(4);
+  for (auto& uv : m.uvs) uv = {0.25 + 0.5 * uv.x, 0.25 + 0.5 * uv.y};
+  const Image img = bake_signal(m, scalar_signal(m, [](double, double) { return 0.75; }), 32, 32);
+  REQUIRE(img.channels == 1);
+  for (float v : img.pixels) CHECK(v == Approx(0.75f));
+}
+
+TEST_CASE("signals from a mesh and their errors", "[signal]") {
+  Mesh m = plane(2);
+  CHECK(make_signal(m, "normals").dimension == 3);
+  // Stored normals are normalized.
+  Mesh scaled = m;
+  scaled.normals.assign(m.positions.size(), Vec3d{0, 0, 6});
+  CHECK(make_signal(scaled, "normals").vertex_values[2] == 1.0);
+  CHECK_THROWS_AS(make_signal(m, "colors", "plane.obj"), InputError);
+  CHECK_THROWS_AS(make_signal(m, "curvature", "plane.obj"), InputError);
+  CHECK_THROWS_AS(make_signal(m, "texture:/nonexistent/x.png", "plane.obj"), InputError);
+  CHECK_THROWS_AS(signal_approximation_error(m, make_signal(m, "normals"), 0, 16), InputError);
+  m.colors.assign(m.positions.size(), Vec3d{0.5, 0.2, 0.1});
+  const Signal c = make_signal(m, "colors");
+  std::vector<double> out(3);
+  c.evaluate(m, 0, 0.3, 0.3, out.data());
+  CHECK(out[0] == Approx(0.5));
+  Mesh bare = plane(2);
+  bare.face_uvs.clear();
+  CHECK_THROWS_AS(bake_signal(bare, c, 8, 8), InputError);
+}
+
+namespace {
+
+// The face builtin with a colour pattern baked to its vertices: stripes only on the right half,
+// so a signal atlas should spend its texels there.
+Mesh striped_face() {
+  Mesh m = make_builtin("face");
+  for (const auto& p : m.positions) {
+    const double s = p.x > 0.2 ? 0.5 + 0.5 * std::sin(25 * p.y) : 0.5;
+    m.colors.push_back({s, 0.5, 1 - s});
+  }
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("signal atlases keep the geometric guarantees and lower the signal error", "[signal]") {
+  const Mesh m = striped_face();
+  const Signal s = make_signal(m, "colors");
+  AtlasOptions o;
+  o.pack.width = o.pack.height = 128;
+  o.seed = 3;
+  SignalAtlasOptions so;
+  double sae[3] = {0, 0, 0}, sst[3] = {0, 0, 0};
+  const SignalUse uses[3] = {SignalUse::None, SignalUse::Param, SignalUse::Full};
+  for (int i = 0; i < 3; ++i) {
+    so.use = uses[i];
+    SignalAtlasStats st;
+    const Atlas a = build_signal_atlas(m, s, o, so, &st);
+    INFO("use " << i);
+    CHECK(a.stats.flipped == 0);
+    CHECK(a.stats.overlapping_pairs == 0);
+    // Every chart meets the geometric Linf bound in its own normalization; the whole atlas's
+    // figure exceeds it by design once charts get different texel densities.
+    if (i == 0) CHECK(a.stats.linf <= o.max_linf);
+    for (const auto& c : a.charts) CHECK(c.linf <= o.max_linf);
+    const Mesh out = a.apply_to(m);
+    for (const Vec2d& uv : out.uvs) CHECK((uv.x >= 0 && uv.x <= 1 && uv.y >= 0 && uv.y <= 1));
+    sae[i] = signal_approximation_error(out, s, 128, 128).sae;
+    sst[i] = st.signal_stretch;
+  }
+  CHECK(sst[1] < sst[0]);
+  CHECK(sae[1] < sae[0]);
+  CHECK(sae[2] < sae[0]);
+}
+
+TEST_CASE("signal atlases are identical for one and two threads", "[signal]") {
+  const Mesh m = striped_face();
+  const Signal s = make_signal(m, "colors");
+  AtlasOptions o;
+  o.pack.width = o.pack.height = 128;
+  SignalAtlasOptions so;
+  Atlas a, b;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    a = build_signal_atlas(m, s, o, so);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    b = build_signal_atlas(m, s, o, so);
+  }
+  CHECK(a.face_chart == b.face_chart);
+  REQUIRE(a.uvs.size() == b.uvs.size());
+  bool same = true;
+  for (size_t i = 0; i < a.uvs.size(); ++i) same = same && a.uvs[i] == b.uvs[i];
+  CHECK(same);
+}
+
+TEST_CASE("isocharts sae reports the field sae", "[signal]") {
+  const std::string dir = "signal_test_tmp";
+  std::string cmd = "mkdir -p " + dir + " && \"" + std::string(ISOCHARTS_CLI) +
+                    "\" -q atlas builtin:face -o " + dir +
+                    "/face.obj --width 128 --height 128 > /dev/null && \"" + ISOCHARTS_CLI +
+                    "\" -q --json sae " + dir + "/face.obj --signal normals --res 64 > " + dir + "/sae.json";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  std::ifstream in(dir + "/sae.json");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string json = ss.str();
+  CHECK(json.find("\"sae\":") != std::string::npos);
+  // An atlas without UVs is refused with exit code 2.
+  cmd = "\"" + std::string(ISOCHARTS_CLI) + "\" -q sae builtin:sphere --signal normals 2>/dev/null";
+  const int rc = std::system(cmd.c_str());
+  CHECK(WEXITSTATUS(rc) == 2);
+}
+
+TEST_CASE("a mapped texture signal bakes back to itself through its own atlas", "[signal]") {
+  // The plane's atlas is the texture's own mapping, so the SAE only sees resampling.
+  Mesh m = plane(8);
+  for (auto& uv : m.uvs) uv = {0.1 + 0.8 * uv.x, 0.1 + 0.8 * uv.y};
+  Image tex(64, 64, 3);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c)
+        tex.at(x, y, c) = static_cast<float>(0.5 + 0.4 * std::sin(0.2 * x + 0.1 * c * y));
+  Signal s;
+  s.dimension = 3;
+  s.texture = tex;
+  s.uvs = m.uvs;
+  s.face_uvs = m.face_uvs;
+  const SaeResult same = signal_approximation_error(m, s, 64, 64);
+  const SaeResult coarse = signal_approximation_error(m, s, 16, 16);
+  CHECK(same.signal_rms > 0.1);
+  CHECK(same.sae < 0.2 * coarse.sae);
+  const std::vector<Imt> imt = face_imt(m, s);
+  double total = 0;
+  for (const Imt& g : imt) total += g[0] + g[2];
+  CHECK(total > 0);
+  const std::string path = "signal_test_imt.txt";
+  write_imt(path, imt);
+  std::ifstream in(path);
+  int lines = 0;
+  for (std::string line; std::getline(in, line);) ++lines;
+  CHECK(lines == m.num_faces());
+}
