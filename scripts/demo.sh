@@ -19,6 +19,9 @@ echo "== remesh: multi-chart geometry image pyramid of the same atlas"
 "$bin" remesh "$out/${name}_atlas.obj" --atlas "$out/${name}_atlas.obj" -o "$out/${name}_remesh.ply" \
   --levels 256,128,64,32 --png "$out/${name}_gim" --exr "$out/${name}_gim" --report "$out/${name}_remesh.json"
 "$bin" render "$out/${name}_remesh_64.ply" --wireframe -o "$out/${name}_remesh_64.png" --views 4
+echo "== synth: the built-in procedural bricks exemplar (exemplars/bricks.png) grown over the surface"
+"$bin" synth "$mesh" -o "$out/${name}_synth.glb" --report "$out/${name}_synth.json"
+"$bin" render "$out/${name}_synth.obj" --texture "$out/${name}_synth.png" -o "$out/${name}_synth_views.png" --views 4
 echo
 echo "Outputs in $out/:"
 ls -1 "$out"
