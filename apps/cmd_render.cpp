@@ -26,9 +26,21 @@ struct RenderArgs {
   int width = 0;   // 0: 400 per view (1024 for --uv-layout)
   int height = 0;  // 0: 400 (1024 for --uv-layout)
   int supersample = 2;
+  std::string up = "y";  // the model's up axis: x, y, z, -x, -y or -z
 };
 
+isochart::Vec3d up_axis(const std::string& name) {
+  const bool negative = !name.empty() && name[0] == '-';
+  const std::string axis = negative ? name.substr(1) : name;
+  const double sign = negative ? -1.0 : 1.0;
+  if (axis == "x") return {sign, 0, 0};
+  if (axis == "y") return {0, sign, 0};
+  if (axis == "z") return {0, 0, sign};
+  bad_option("--up must be x, y, z, -x, -y or -z, not '" + name + "'");
+}
+
 void run_render(const Context& ctx, const RenderArgs& a) {
+  up_axis(a.up);  // reject a bad axis before loading anything
   const auto t0 = std::chrono::steady_clock::now();
   if (a.charts && !a.texture.empty()) bad_option("--charts and --texture are exclusive");
   if (a.uv_layout && (!a.texture.empty() || a.wireframe || a.ortho || a.transparent))
@@ -72,6 +84,7 @@ void run_render(const Context& ctx, const RenderArgs& a) {
     o.perspective = !a.ortho;
     o.transparent = a.transparent;
     o.supersample = a.supersample;
+    o.up = up_axis(a.up);
     isochart::Image texture;
     if (!a.texture.empty()) {
       if (!mesh.has_uvs())
@@ -95,6 +108,7 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   j["output"] = a.output;
   j["mode"] = mode;
   j["views"] = a.uv_layout ? 0 : a.views;
+  if (!a.uv_layout) j["up"] = a.up;
   j["width"] = image.width;
   j["height"] = image.height;
   j["faces"] = mesh.num_faces();
@@ -124,6 +138,7 @@ void add_render(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(1, 16384));
   sub->add_option("--height", args->height, "Image height in pixels (default 400; 1024 for --uv-layout)")
       ->check(CLI::Range(1, 16384));
+  sub->add_option("--up", args->up, "The model's up axis, x, y, z, -x, -y or -z (default y; e.g. z for horse.ply)");
   sub->add_flag("--ortho", args->ortho, "Orthographic instead of perspective projection");
   sub->add_flag("--transparent", args->transparent, "Transparent background (RGBA) instead of white");
   sub->add_option("--supersample", args->supersample, "Samples per pixel along each axis (anti-aliasing)")

@@ -333,5 +333,13 @@ TEST_CASE("isocharts render writes the image and reports it", "[render][cli]") {
   CHECK(run("render builtin:nothing -o " + out) == 2);
   CHECK(run("render builtin:sphere -o " + out + " --views 9") == 2);
   CHECK(run("render builtin:sphere --uv-layout -o " + out) == 2);  // no UVs
+  CHECK(run("render builtin:sphere -o " + out + " --up w") == 2);
+  // --up turns the views: the creature (y up) seen with z as up is another picture.
+  CHECK(run("render builtin:creature -o " + out + " --views 1 --width 80 --height 80") == 0);
+  const Image y_up = read_image(out);
+  CHECK(run("render builtin:creature -o " + out + " --views 1 --width 80 --height 80 --up z") == 0);
+  const Image z_up = read_image(out);
+  CHECK(z_up.width == y_up.width);
+  CHECK(z_up.pixels != y_up.pixels);
   fs::remove_all(dir);
 }
