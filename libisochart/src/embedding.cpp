@@ -170,6 +170,99 @@ std::vector<int> choose_landmarks(const GeodesicSolver& solver, int count, Landm
   return sample_landmarks(solver, count, method, rows, nullptr);
 }
 
+void embed_landmarks(Embedding& e, int max_dimensions, const std::function<bool(int)>& referenced) {
+  const int nv = e.num_vertices;
+  const int q = static_cast<int>(e.landmarks.size());
+  const std::size_t stride = static_cast<std::size_t>(nv);
+  // The front from landmark i reaching j and the one from j reaching i differ by the marching
+  // error; both entries get their mean, so that D is symmetric and the rows agree with it
+  // (place_points on a landmark's own row then gives back its coordinates exactly).
+  double* dist = e.landmark_distances.data();
+  for (int i = 0; i < q; ++i)
+    for (int j = 0; j < i; ++j) {
+      double& a = dist[i * stride + e.landmarks[j]];
+      double& b = dist[j * stride + e.landmarks[i]];
+      a = b = 0.5 * (a + b);
+    }
+  Eigen::MatrixXd d2(q, q);
+  for (int i = 0; i < q; ++i)
+    for (int j = 0; j < q; ++j) {
+      const double a = dist[i * stride + e.landmarks[j]];
+      d2(i, j) = i == j ? 0.0 : a * a;
+    }
+  const Eigen::VectorXd row_mean = d2.rowwise().mean();
+  const double total_mean = row_mean.mean();
+  Eigen::MatrixXd b(q, q);
+  for (int i = 0; i < q; ++i)
+    for (int j = 0; j < q; ++j) b(i, j) = -0.5 * (d2(i, j) - row_mean[i] - row_mean[j] + total_mean);
+  // The energy shares of §5.1/§5.3 are taken over the positive spectrum: geodesic distances are
+  // not Euclidean, so B has negative eigenvalues too, and with them in the sum (the trace) the
+  // top three would claim about 100% of the energy of nearly any shape.
+  {
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> all(b, Eigen::EigenvaluesOnly);
+    e.eigenvalue_sum = 0;
+    for (int i = 0; i < q; ++i) e.eigenvalue_sum += std::max(all.eigenvalues()[i], 0.0);
+  }
+  e.mean_squared_distances.assign(row_mean.data(), row_mean.data() + q);
+
+  const int nev = std::min(max_dimensions, q);
+  Eigen::VectorXd values;
+  Eigen::MatrixXd vectors;
+  top_eigenpairs(b, nev, values, vectors);
+  for (int j = 0; j < values.size(); ++j) {
+    if (!(values[j] > 0) || values[j] <= kRelativeEigenvalueFloor * values[0]) break;
+    e.eigenvalues.push_back(values[j]);
+  }
+  e.dimensions = static_cast<int>(e.eigenvalues.size());
+  const int dims = e.dimensions;
+  e.eigenvectors.resize(static_cast<std::size_t>(dims) * q);
+  for (int j = 0; j < dims; ++j) {
+    int big = 0;
+    for (int k = 1; k < q; ++k)
+      if (std::abs(vectors(k, j)) > std::abs(vectors(big, j))) big = k;
+    const double sign = vectors(big, j) < 0 ? -1.0 : 1.0;
+    for (int k = 0; k < q; ++k) e.eigenvectors[j * q + k] = sign * vectors(k, j);
+  }
+
+  // Placement (§5.2.1) for every vertex, rows streamed in chunks of vertices; the sum over
+  // landmarks runs in a fixed order, so chunking and threads do not change the result.
+  e.coordinates.assign(stride * dims, 0.0);
+  std::vector<double> scale(dims);
+  for (int j = 0; j < dims; ++j) scale[j] = 0.5 / std::sqrt(e.eigenvalues[j]);
+  const int num_chunks = (nv + kVertexChunk - 1) / kVertexChunk;
+  tbb::parallel_for(tbb::blocked_range<int>(0, num_chunks), [&](const tbb::blocked_range<int>& r) {
+    // Accumulators are dimension-major so that the inner loops run over contiguous vertices
+    // (vectorized): per landmark k, acc_j += v_j[k] · (Δ̄_k − d_k²) for the whole chunk.
+    std::vector<double> acc, t;
+    for (int chunk = r.begin(); chunk != r.end(); ++chunk) {
+      const int first = chunk * kVertexChunk, last = std::min(nv, first + kVertexChunk);
+      const int m = last - first;
+      acc.assign(static_cast<std::size_t>(m) * dims, 0.0);
+      t.resize(m);
+      for (int k = 0; k < q; ++k) {
+        const double* row = dist + k * stride + first;
+        const double mean = e.mean_squared_distances[k];
+        for (int i = 0; i < m; ++i) t[i] = std::isfinite(row[i]) ? mean - row[i] * row[i] : 0.0;
+        for (int j = 0; j < dims; ++j) {
+          const double v = e.eigenvectors[j * q + k];
+          double* a = acc.data() + static_cast<std::size_t>(j) * m;
+          for (int i = 0; i < m; ++i) a[i] += v * t[i];
+        }
+      }
+      for (int i = 0; i < m; ++i) {
+        if (!referenced(first + i)) continue;
+        for (int j = 0; j < dims; ++j)
+          e.coordinates[(first + i) * static_cast<std::size_t>(dims) + j] =
+              scale[j] * acc[static_cast<std::size_t>(j) * m + i];
+      }
+    }
+  });
+  for (int k = 0; k < q; ++k)
+    for (int j = 0; j < dims; ++j)
+      e.coordinates[e.landmarks[k] * static_cast<std::size_t>(dims) + j] =
+          std::sqrt(e.eigenvalues[j]) * e.eigenvectors[j * q + k];
+}
+
 Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& options) {
   if (options.landmarks < 2)
     throw InputError("", "embedding: landmarks must be at least 2, got " + std::to_string(options.landmarks));
@@ -234,93 +327,7 @@ Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& 
   e.seconds_rows = seconds_since(t0);
 
   t0 = Clock::now();
-  // The front from landmark i reaching j and the one from j reaching i differ by the marching
-  // error; both entries get their mean, so that D is symmetric and the rows agree with it
-  // (place_points on a landmark's own row then gives back its coordinates exactly).
-  double* dist = e.landmark_distances.data();
-  for (int i = 0; i < q; ++i)
-    for (int j = 0; j < i; ++j) {
-      double& a = dist[i * stride + e.landmarks[j]];
-      double& b = dist[j * stride + e.landmarks[i]];
-      a = b = 0.5 * (a + b);
-    }
-  Eigen::MatrixXd d2(q, q);
-  for (int i = 0; i < q; ++i)
-    for (int j = 0; j < q; ++j) {
-      const double a = dist[i * stride + e.landmarks[j]];
-      d2(i, j) = i == j ? 0.0 : a * a;
-    }
-  const Eigen::VectorXd row_mean = d2.rowwise().mean();
-  const double total_mean = row_mean.mean();
-  Eigen::MatrixXd b(q, q);
-  for (int i = 0; i < q; ++i)
-    for (int j = 0; j < q; ++j) b(i, j) = -0.5 * (d2(i, j) - row_mean[i] - row_mean[j] + total_mean);
-  // The energy shares of §5.1/§5.3 are taken over the positive spectrum: geodesic distances are
-  // not Euclidean, so B has negative eigenvalues too, and with them in the sum (the trace) the
-  // top three would claim about 100% of the energy of nearly any shape.
-  {
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> all(b, Eigen::EigenvaluesOnly);
-    e.eigenvalue_sum = 0;
-    for (int i = 0; i < q; ++i) e.eigenvalue_sum += std::max(all.eigenvalues()[i], 0.0);
-  }
-  e.mean_squared_distances.assign(row_mean.data(), row_mean.data() + q);
-
-  const int nev = std::min(options.max_dimensions, q);
-  Eigen::VectorXd values;
-  Eigen::MatrixXd vectors;
-  top_eigenpairs(b, nev, values, vectors);
-  for (int j = 0; j < values.size(); ++j) {
-    if (!(values[j] > 0) || values[j] <= kRelativeEigenvalueFloor * values[0]) break;
-    e.eigenvalues.push_back(values[j]);
-  }
-  e.dimensions = static_cast<int>(e.eigenvalues.size());
-  const int dims = e.dimensions;
-  e.eigenvectors.resize(static_cast<std::size_t>(dims) * q);
-  for (int j = 0; j < dims; ++j) {
-    int big = 0;
-    for (int k = 1; k < q; ++k)
-      if (std::abs(vectors(k, j)) > std::abs(vectors(big, j))) big = k;
-    const double sign = vectors(big, j) < 0 ? -1.0 : 1.0;
-    for (int k = 0; k < q; ++k) e.eigenvectors[j * q + k] = sign * vectors(k, j);
-  }
-
-  // Placement (§5.2.1) for every vertex, rows streamed in chunks of vertices; the sum over
-  // landmarks runs in a fixed order, so chunking and threads do not change the result.
-  e.coordinates.assign(stride * dims, 0.0);
-  std::vector<double> scale(dims);
-  for (int j = 0; j < dims; ++j) scale[j] = 0.5 / std::sqrt(e.eigenvalues[j]);
-  const int num_chunks = (nv + kVertexChunk - 1) / kVertexChunk;
-  tbb::parallel_for(tbb::blocked_range<int>(0, num_chunks), [&](const tbb::blocked_range<int>& r) {
-    // Accumulators are dimension-major so that the inner loops run over contiguous vertices
-    // (vectorized): per landmark k, acc_j += v_j[k] · (Δ̄_k − d_k²) for the whole chunk.
-    std::vector<double> acc, t;
-    for (int chunk = r.begin(); chunk != r.end(); ++chunk) {
-      const int first = chunk * kVertexChunk, last = std::min(nv, first + kVertexChunk);
-      const int m = last - first;
-      acc.assign(static_cast<std::size_t>(m) * dims, 0.0);
-      t.resize(m);
-      for (int k = 0; k < q; ++k) {
-        const double* row = dist + k * stride + first;
-        const double mean = e.mean_squared_distances[k];
-        for (int i = 0; i < m; ++i) t[i] = std::isfinite(row[i]) ? mean - row[i] * row[i] : 0.0;
-        for (int j = 0; j < dims; ++j) {
-          const double v = e.eigenvectors[j * q + k];
-          double* a = acc.data() + static_cast<std::size_t>(j) * m;
-          for (int i = 0; i < m; ++i) a[i] += v * t[i];
-        }
-      }
-      for (int i = 0; i < m; ++i) {
-        if (!solver.is_referenced(first + i)) continue;
-        for (int j = 0; j < dims; ++j)
-          e.coordinates[(first + i) * static_cast<std::size_t>(dims) + j] =
-              scale[j] * acc[static_cast<std::size_t>(j) * m + i];
-      }
-    }
-  });
-  for (int k = 0; k < q; ++k)
-    for (int j = 0; j < dims; ++j)
-      e.coordinates[e.landmarks[k] * static_cast<std::size_t>(dims) + j] =
-          std::sqrt(e.eigenvalues[j]) * e.eigenvectors[j * q + k];
+  embed_landmarks(e, options.max_dimensions, [&](int v) { return solver.is_referenced(v); });
   e.seconds_spectral = seconds_since(t0);
   return e;
 }

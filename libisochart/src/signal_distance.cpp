@@ -3,7 +3,6 @@
 
 #include "signal_distance.h"
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -83,63 +82,15 @@ Embedding combined_embedding(const ChartGeometry& g, const Embedding& geo,
                                   ? beta * dg + (1 - beta) * sig[i] * (avg_geo / avg_sig)
                                   : kInf;
   }
-  // Classical MDS of the landmark block (§4.1), as in landmark_isomap.
-  double* dist = e.landmark_distances.data();
-  for (int i = 0; i < q; ++i)
-    for (int j = 0; j < i; ++j) {
-      double& a = dist[i * stride + e.landmarks[j]];
-      double& b = dist[j * stride + e.landmarks[i]];
-      a = b = 0.5 * (a + b);
-    }
-  Eigen::MatrixXd d2(q, q);
-  for (int i = 0; i < q; ++i)
-    for (int j = 0; j < q; ++j) {
-      const double a = dist[i * stride + e.landmarks[j]];
-      d2(i, j) = i == j ? 0.0 : a * a;
-    }
-  const Eigen::VectorXd row_mean = d2.rowwise().mean();
-  const double total_mean = row_mean.mean();
-  Eigen::MatrixXd b(q, q);
-  for (int i = 0; i < q; ++i)
-    for (int j = 0; j < q; ++j) b(i, j) = -0.5 * (d2(i, j) - row_mean[i] - row_mean[j] + total_mean);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(b);
-  if (es.info() != Eigen::Success) return geo;
-  e.eigenvalue_sum = 0;
-  for (int i = 0; i < q; ++i) e.eigenvalue_sum += std::max(es.eigenvalues()[i], 0.0);
-  e.mean_squared_distances.assign(row_mean.data(), row_mean.data() + q);
-  const int nev = std::min(max_dimensions, q);
-  for (int j = 0; j < nev; ++j) {
-    const double v = es.eigenvalues()[q - 1 - j];  // ascending order from Eigen
-    if (!(v > 0) || v <= 1e-6 * es.eigenvalues()[q - 1]) break;
-    e.eigenvalues.push_back(v);
-  }
-  e.dimensions = static_cast<int>(e.eigenvalues.size());
+  // Vertices with an infinite distance to some landmark stay at the origin, as the geometric
+  // embedding leaves them.
+  const auto reached = [&](int v) {
+    for (int k = 0; k < q; ++k)
+      if (!std::isfinite(e.landmark_distances[k * stride + v])) return false;
+    return true;
+  };
+  embed_landmarks(e, max_dimensions, reached);
   if (e.dimensions < 2) return geo;
-  const int dims = e.dimensions;
-  e.eigenvectors.resize(static_cast<size_t>(dims) * q);
-  for (int j = 0; j < dims; ++j) {
-    const auto col = es.eigenvectors().col(q - 1 - j);
-    int big = 0;
-    for (int k = 1; k < q; ++k)
-      if (std::abs(col[k]) > std::abs(col[big])) big = k;
-    const double sign = col[big] < 0 ? -1.0 : 1.0;
-    for (int k = 0; k < q; ++k) e.eigenvectors[j * q + k] = sign * col[k];
-  }
-  e.coordinates.assign(stride * dims, 0.0);
-  std::vector<double> sq(q);
-  for (int v = 0; v < nv; ++v) {
-    bool ok = true;
-    for (int k = 0; k < q; ++k) {
-      const double d = dist[k * stride + v];
-      ok = ok && std::isfinite(d);
-      sq[k] = d * d;
-    }
-    if (ok) place_points(e, dims, sq.data(), e.coordinates.data() + static_cast<size_t>(v) * dims);
-  }
-  for (int k = 0; k < q; ++k)
-    for (int j = 0; j < dims; ++j)
-      e.coordinates[static_cast<size_t>(e.landmarks[k]) * dims + j] =
-          std::sqrt(e.eigenvalues[j]) * e.eigenvectors[j * q + k];
   return e;
 }
 

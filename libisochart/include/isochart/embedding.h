@@ -3,6 +3,7 @@
 /// of the squared geodesic distances between q landmark vertices, and the landmark-MDS placement
 /// of every other vertex from its distances to the landmarks.
 
+#include <functional>
 #include <vector>
 
 #include "isochart/geodesic.h"
@@ -80,6 +81,13 @@ struct Embedding {
 /// \throw Error when the referenced vertices are not one connected surface (embed each
 ///        component separately).
 Embedding landmark_isomap(const GeodesicSolver& solver, const EmbeddingOptions& options = {});
+
+/// The spectral half of landmark_isomap for any landmark distances (e.g. the combined
+/// geodesic/signal distance of §7 eq. 6): from `e.num_vertices`, `e.landmarks` and the q × #V
+/// `e.landmark_distances` (symmetrized here on the landmark block), computes the classical MDS
+/// of the landmarks (§4.1), at most `max_dimensions` positive eigenpairs, and places every
+/// vertex for which `referenced` holds (§5.2.1; non-finite distances contribute nothing).
+void embed_landmarks(Embedding& e, int max_dimensions, const std::function<bool(int)>& referenced);
 
 /// Chooses `count` landmarks (all referenced vertices, in id order, when there are no more
 /// than `count`). Farthest-point sampling starts at the referenced vertex farthest from the
