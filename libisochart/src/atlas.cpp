@@ -1,5 +1,6 @@
 // The iso-charts driver (Iso-charts §3): recursive stretch-driven splitting, merging, packing.
 
+#include "atlas_charts.h"
 #include "isochart/atlas.h"
 
 #include <tbb/parallel_for.h>
@@ -533,30 +534,19 @@ Mesh Atlas::apply_to(const Mesh& mesh) const {
 }
 
 PackResult pack_atlas(const Mesh& mesh, Atlas& atlas, const PackOptions& options, const Progress& progress) {
-  // Gather each chart's corners into its own small mesh for the packer.
+  // Each chart as its own small mesh for the packer.
   const int nc = atlas.num_charts();
+  const std::vector<detail::AtlasChart> split = detail::split_atlas_charts(mesh, atlas);
   std::vector<PackChart> charts(nc);
-  std::vector<std::vector<int>> chart_uv_ids(nc);
-  std::vector<int> local(atlas.uvs.size(), -1);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    const int c = atlas.face_chart[f];
-    Face t;
-    for (int k = 0; k < 3; ++k) {
-      const int u = atlas.face_uvs[f][k];
-      if (local[u] < 0) {
-        local[u] = static_cast<int>(chart_uv_ids[c].size());
-        chart_uv_ids[c].push_back(u);
-        charts[c].uv.push_back(atlas.uvs[u]);
-      }
-      t[k] = local[u];
-    }
-    charts[c].faces.push_back(t);
-    charts[c].area_3d += triangle_area(mesh.positions[mesh.faces[f][0]], mesh.positions[mesh.faces[f][1]],
-                                       mesh.positions[mesh.faces[f][2]]);
+  for (int c = 0; c < nc; ++c) {
+    charts[c].uv = split[c].uv;
+    charts[c].faces = split[c].tris;
+    for (const Face& t : split[c].tris)
+      charts[c].area_3d += triangle_area(split[c].positions[t[0]], split[c].positions[t[1]], split[c].positions[t[2]]);
   }
   PackResult r = pack_charts(charts, options, progress);
   for (int c = 0; c < nc; ++c)
-    for (size_t i = 0; i < chart_uv_ids[c].size(); ++i) atlas.uvs[chart_uv_ids[c][i]] = charts[c].uv[i];
+    for (size_t i = 0; i < split[c].uv_ids.size(); ++i) atlas.uvs[split[c].uv_ids[i]] = charts[c].uv[i];
 
   // Whole-atlas figures, measured on the final texture coordinates.
   const Mesh m = atlas.apply_to(mesh);

@@ -2,6 +2,7 @@
 // stretch-optimized variant, and atlases read from other tools. The only CGAL user here is
 // lscm_layout (CGAL's LSCM parameterizer).
 
+#include "atlas_charts.h"
 #include "isochart/baselines.h"
 
 #include <algorithm>
@@ -343,36 +344,6 @@ class LscmBuilder {
 };
 
 // Chart-local copies of an atlas's charts: positions, faces and layout per chart.
-struct LocalChart {
-  std::vector<int> faces;     // mesh face ids
-  std::vector<int> uv_ids;    // chart vertex -> atlas uv id
-  std::vector<Vec3d> positions;
-  std::vector<Face> tris;
-  std::vector<Vec2d> uv;
-};
-
-std::vector<LocalChart> local_charts(const Mesh& mesh, const Atlas& atlas) {
-  std::vector<LocalChart> charts(atlas.num_charts());
-  std::vector<int> local(atlas.uvs.size(), -1);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    LocalChart& c = charts[atlas.face_chart[f]];
-    c.faces.push_back(f);
-    Face t;
-    for (int k = 0; k < 3; ++k) {
-      const int u = atlas.face_uvs[f][k];
-      if (local[u] < 0) {
-        local[u] = static_cast<int>(c.uv_ids.size());
-        c.uv_ids.push_back(u);
-        c.positions.push_back(mesh.positions[mesh.faces[f][k]]);
-        c.uv.push_back(atlas.uvs[u]);
-      }
-      t[k] = local[u];
-    }
-    c.tris.push_back(t);
-  }
-  return charts;
-}
-
 }  // namespace
 
 bool is_disk(const Mesh& mesh, const std::vector<int>& faces) {
@@ -401,10 +372,10 @@ Atlas build_lscm_atlas(const Mesh& mesh, const LscmOptions& options, const Progr
 void optimize_atlas_stretch(const Mesh& mesh, Atlas& atlas, const OptimizeOptions& options,
                             const PackOptions& pack, const Progress& progress) {
   const auto t0 = Clock::now();
-  std::vector<LocalChart> charts = local_charts(mesh, atlas);
+  std::vector<detail::AtlasChart> charts = detail::split_atlas_charts(mesh, atlas);
   std::atomic<int> finished{0};
   tbb::parallel_for(std::size_t(0), charts.size(), [&](std::size_t c) {
-    LocalChart& ch = charts[c];
+    detail::AtlasChart& ch = charts[c];
     OptimizeOptions o = options;
     // Per-chart stream from the user seed and the chart's identity (its first face).
     o.seed = options.seed * 0x9E3779B97F4A7C15ULL + static_cast<std::uint64_t>(ch.faces.front());
@@ -414,7 +385,7 @@ void optimize_atlas_stretch(const Mesh& mesh, Atlas& atlas, const OptimizeOption
     report(progress, Stage::Optimization, static_cast<double>(++finished) / charts.size());
   });
   for (std::size_t c = 0; c < charts.size(); ++c) {
-    const LocalChart& ch = charts[c];
+    const detail::AtlasChart& ch = charts[c];
     for (std::size_t i = 0; i < ch.uv_ids.size(); ++i) atlas.uvs[ch.uv_ids[i]] = ch.uv[i];
     const StretchStats st = measure_stretch(ch.positions, ch.tris, ch.uv);
     atlas.charts[c].l2 = st.l2;
@@ -447,9 +418,9 @@ Atlas atlas_from_uvs(const Mesh& mesh) {
     }
     ++atlas.charts[c].faces;
   }
-  std::vector<LocalChart> charts = local_charts(mesh, atlas);
+  std::vector<detail::AtlasChart> charts = detail::split_atlas_charts(mesh, atlas);
   for (int c = 0; c < nc; ++c) {
-    LocalChart& ch = charts[c];
+    detail::AtlasChart& ch = charts[c];
     const double area = signed_uv_area(ch.tris, ch.uv);
     if (area == 0 || !std::isfinite(area))
       throw InputError("", "chart " + std::to_string(c) + " (face " + std::to_string(ch.faces.front()) +

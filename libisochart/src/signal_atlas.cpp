@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <string>
 
+#include "atlas_charts.h"
 #include "isochart/error.h"
 #include "isochart/io.h"
 #include "isochart/optimize.h"
@@ -25,44 +26,14 @@ double since(std::chrono::steady_clock::time_point t0) {
 }
 
 // One chart of an atlas as its own small mesh (one vertex per texture coordinate).
-struct LocalChart {
-  std::vector<int> uv_ids;  // local vertex → atlas uv id
-  std::vector<int> faces;   // local face → mesh face
-  std::vector<Vec3d> positions;
-  std::vector<Face> tris;
-  std::vector<Vec2d> uv;
-};
-
-std::vector<LocalChart> split_charts(const Mesh& mesh, const Atlas& atlas) {
-  std::vector<LocalChart> charts(atlas.num_charts());
-  std::vector<int> local(atlas.uvs.size(), -1);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    LocalChart& c = charts[atlas.face_chart[f]];
-    Face t;
-    for (int k = 0; k < 3; ++k) {
-      const int u = atlas.face_uvs[f][k];
-      if (local[u] < 0) {
-        local[u] = static_cast<int>(c.uv_ids.size());
-        c.uv_ids.push_back(u);
-        c.positions.push_back(mesh.positions[mesh.faces[f][k]]);
-        c.uv.push_back(atlas.uvs[u]);
-      }
-      t[k] = local[u];
-    }
-    c.faces.push_back(f);
-    c.tris.push_back(t);
-  }
-  return charts;
-}
-
-std::vector<Imt> local_metric(const LocalChart& c, const std::vector<Imt>& metric) {
+std::vector<Imt> local_metric(const detail::AtlasChart& c, const std::vector<Imt>& metric) {
   std::vector<Imt> m(c.faces.size());
   for (size_t f = 0; f < c.faces.size(); ++f) m[f] = metric[c.faces[f]];
   return m;
 }
 
 // Σ A·tr(JᵀGJ) of a chart (its signal-metric energy) and its UV area.
-void chart_energy(const LocalChart& c, const std::vector<Imt>& metric, double& energy, double& uv_area) {
+void chart_energy(const detail::AtlasChart& c, const std::vector<Imt>& metric, double& energy, double& uv_area) {
   energy = uv_area = 0;
   for (size_t f = 0; f < c.tris.size(); ++f) {
     const Face& t = c.tris[f];
@@ -86,7 +57,7 @@ void chart_energy(const LocalChart& c, const std::vector<Imt>& metric, double& e
 
 // Re-optimizes a chart in the signal metric; keeps the result only if it has no flip, no
 // overlap and meets the geometric bounds. Returns true when the chart changed.
-bool reoptimize(LocalChart& c, const std::vector<Imt>& metric, const AtlasOptions& o, double max_geometric_l2,
+bool reoptimize(detail::AtlasChart& c, const std::vector<Imt>& metric, const AtlasOptions& o, double max_geometric_l2,
                 std::uint64_t seed) {
   if (c.tris.size() < 2) return false;
   std::vector<Vec2d> uv = c.uv;
@@ -108,7 +79,7 @@ bool reoptimize(LocalChart& c, const std::vector<Imt>& metric, const AtlasOption
 
 // Packs the charts with UV area ∝ sqrt(E·A_uv): for a chart whose energy at UV scale s is
 // E/s², minimizing Σ E_c/s_c² under a fixed total UV area Σ s_c²·A_c gives s_c⁴ ∝ E_c/A_c.
-void pack_weighted(const Mesh& mesh, Atlas& atlas, std::vector<LocalChart>& charts,
+void pack_weighted(const Mesh& mesh, Atlas& atlas, std::vector<detail::AtlasChart>& charts,
                    const std::vector<Imt>& metric, const PackOptions& po, const Progress& progress) {
   std::vector<PackChart> pc(charts.size());
   double total_area = 0, total_weight = 0;
@@ -193,7 +164,7 @@ Atlas build_signal_atlas(const Mesh& mesh, const Signal& signal, const AtlasOpti
   SignalAtlasStats st;
   t0 = std::chrono::steady_clock::now();
   if (so.use != SignalUse::None) {
-    std::vector<LocalChart> charts = split_charts(mesh, atlas);
+    std::vector<detail::AtlasChart> charts = detail::split_atlas_charts(mesh, atlas);
     {
       // Geometric charts (Param) and signal charts (Full, whose parameterization only had to
       // meet the bound) are both optimized fully in the signal metric here.
