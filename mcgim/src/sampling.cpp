@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <limits>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -142,7 +143,29 @@ struct LocalGrid {
   int x0 = 0, y0 = 0, w = 0, h = 0;
   std::vector<char> in;
   int at(int x, int y) const { return y * w + x; }
+  /// Image index (row width W) of a grid cell.
+  int to_image(int v, int W) const { return (v / w + y0) * W + (v % w + x0); }
 };
+
+// The bounding box of some image samples (row width W) with a margin of one empty cell, the
+// samples marked in it.
+LocalGrid grid_around(const std::vector<int>& samples, int W) {
+  int x0 = std::numeric_limits<int>::max(), y0 = x0, x1 = -1, y1 = -1;
+  for (int i : samples) {
+    x0 = std::min(x0, i % W);
+    x1 = std::max(x1, i % W);
+    y0 = std::min(y0, i / W);
+    y1 = std::max(y1, i / W);
+  }
+  LocalGrid g;
+  g.x0 = x0 - 1;
+  g.y0 = y0 - 1;
+  g.w = x1 - x0 + 3;
+  g.h = y1 - y0 + 3;
+  g.in.assign(static_cast<std::size_t>(g.w) * g.h, 0);
+  for (int i : samples) g.in[g.at(i % W - g.x0, i / W - g.y0)] = 1;
+  return g;
+}
 
 // Triangles of the block with lower-left corner (bx, by), counter-clockwise in grid space (the
 // diagonal of a full block is arbitrary: it changes neither the boundary nor the topology).
@@ -507,21 +530,11 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
   tbb::parallel_for(0, nc, [&](int c) {
     ChartRegion& r = s.regions[c];
     if (hits[c].empty()) return;
-    int x0 = W, y0 = H, x1 = -1, y1 = -1;
-    for (const Hit& h : hits[c]) {
-      x0 = std::min(x0, h.sample % W);
-      x1 = std::max(x1, h.sample % W);
-      y0 = std::min(y0, h.sample / W);
-      y1 = std::max(y1, h.sample / W);
-    }
-    LocalGrid g;
-    g.x0 = x0 - 1;
-    g.y0 = y0 - 1;
-    g.w = x1 - x0 + 3;
-    g.h = y1 - y0 + 3;
-    g.in.assign(static_cast<std::size_t>(g.w) * g.h, 0);
-    for (const Hit& h : hits[c]) g.in[g.at(h.sample % W - g.x0, h.sample / W - g.y0)] = 1;
-    auto to_image = [&](int v) { return (v / g.w + g.y0) * W + (v % g.w + g.x0); };
+    std::vector<int> hit_samples;
+    hit_samples.reserve(hits[c].size());
+    for (const Hit& h : hits[c]) hit_samples.push_back(h.sample);
+    LocalGrid g = grid_around(hit_samples, W);
+    auto to_image = [&](int v) { return g.to_image(v, W); };
     // Open the slits of a chart with holes: no block triangle may cross a slit, so every
     // sample within √2/2 of it goes (each crossing triangle edge has an end that close).
     for (const auto& slit : a.charts[c].slits)
@@ -666,23 +679,10 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
       if (free_for(c, t % W, t / W)) set.push_back(t);
     std::sort(set.begin(), set.end());
     set.erase(std::unique(set.begin(), set.end()), set.end());
-    int x0 = W, y0 = H, x1 = -1, y1 = -1;
-    for (int i : set) {
-      x0 = std::min(x0, i % W);
-      x1 = std::max(x1, i % W);
-      y0 = std::min(y0, i / W);
-      y1 = std::max(y1, i / W);
-    }
-    LocalGrid g;
-    g.x0 = x0 - 1;
-    g.y0 = y0 - 1;
-    g.w = x1 - x0 + 3;
-    g.h = y1 - y0 + 3;
-    g.in.assign(static_cast<std::size_t>(g.w) * g.h, 0);
-    for (int i : set) g.in[g.at(i % W - g.x0, i / W - g.y0)] = 1;
+    LocalGrid g = grid_around(set, W);
     long long dropped = 0;
     std::vector<int> ring = make_disk(g, dropped);
-    auto to_image = [&](int v) { return (v / g.w + g.y0) * W + (v % g.w + g.x0); };
+    auto to_image = [&](int v) { return g.to_image(v, W); };
     std::vector<int> samples;
     for (int v = 0; v < g.w * g.h; ++v)
       if (g.in[v]) samples.push_back(to_image(v));
@@ -742,23 +742,10 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
                cand.end());
     std::vector<int> ring;
     if (!cand.empty()) {
-      int x0 = W, y0 = H, x1 = -1, y1 = -1;
-      for (int i : cand) {
-        x0 = std::min(x0, i % W);
-        x1 = std::max(x1, i % W);
-        y0 = std::min(y0, i / W);
-        y1 = std::max(y1, i / W);
-      }
-      LocalGrid g;
-      g.x0 = x0 - 1;
-      g.y0 = y0 - 1;
-      g.w = x1 - x0 + 3;
-      g.h = y1 - y0 + 3;
-      g.in.assign(static_cast<std::size_t>(g.w) * g.h, 0);
-      for (int i : cand) g.in[g.at(i % W - g.x0, i / W - g.y0)] = 1;
+      LocalGrid g = grid_around(cand, W);
       long long dropped = 0;
       ring = make_disk(g, dropped);
-      auto to_image = [&](int v) { return (v / g.w + g.y0) * W + (v % g.w + g.x0); };
+      auto to_image = [&](int v) { return g.to_image(v, W); };
       if (!ring.empty()) {
         for (int v = 0; v < g.w * g.h; ++v)
           if (g.in[v]) r.samples.push_back(to_image(v));
