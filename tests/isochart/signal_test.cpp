@@ -1,11 +1,13 @@
 #include "isochart/signal.h"
 
 #include <sys/wait.h>
+#include <unistd.h>
 #include <tbb/global_control.h>
 
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -234,8 +236,10 @@ TEST_CASE("signal atlases are identical for one and two threads", "[signal]") {
 }
 
 TEST_CASE("isocharts sae reports the field sae", "[signal]") {
-  const std::string dir = "signal_test_tmp";
-  std::string cmd = "mkdir -p " + dir + " && \"" + std::string(ISOCHARTS_CLI) +
+  const std::filesystem::path tmp =
+      std::filesystem::temp_directory_path() / ("isocharts_signal_test_" + std::to_string(::getpid()));
+  const std::string dir = tmp.string();
+  std::string cmd = "mkdir -p '" + dir + "' && \"" + std::string(ISOCHARTS_CLI) +
                     "\" -q atlas builtin:face -o " + dir +
                     "/face.obj --width 128 --height 128 > /dev/null && \"" + ISOCHARTS_CLI +
                     "\" -q --json sae " + dir + "/face.obj --signal normals --res 64 > " + dir + "/sae.json";
@@ -249,6 +253,7 @@ TEST_CASE("isocharts sae reports the field sae", "[signal]") {
   cmd = "\"" + std::string(ISOCHARTS_CLI) + "\" -q sae builtin:sphere --signal normals 2>/dev/null";
   const int rc = std::system(cmd.c_str());
   CHECK(WEXITSTATUS(rc) == 2);
+  std::filesystem::remove_all(tmp);
 }
 
 TEST_CASE("a mapped texture signal bakes back to itself through its own atlas", "[signal]") {
@@ -273,10 +278,13 @@ TEST_CASE("a mapped texture signal bakes back to itself through its own atlas", 
   double total = 0;
   for (const Imt& g : imt) total += g[0] + g[2];
   CHECK(total > 0);
-  const std::string path = "signal_test_imt.txt";
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("isocharts_signal_imt_" + std::to_string(::getpid()) + ".txt"))
+                               .string();
   write_imt(path, imt);
   std::ifstream in(path);
   int lines = 0;
   for (std::string line; std::getline(in, line);) ++lines;
   CHECK(lines == m.num_faces());
+  std::filesystem::remove(path);
 }
