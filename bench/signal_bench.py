@@ -96,6 +96,8 @@ def main():
     ap.add_argument("--render-mesh", default="bunny", help="mesh whose atlases are rendered")
     ap.add_argument("--meshes", nargs="*", default=["bunny.obj", "horse.ply", "gargoyle.off"])
     ap.add_argument("--color-mesh", default="bunny_lowres.off")
+    ap.add_argument("--uses", nargs="*", default=USES, choices=USES, help="atlases to build (default: all three)")
+    ap.add_argument("--beta", type=float, default=None, help="eq. 6 beta for the full atlases (default: the CLI's)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     cases = [(os.path.join(SHARED, m), "normals") for m in a.meshes]
@@ -107,12 +109,13 @@ def main():
     for path, signal in cases:
         name = os.path.splitext(os.path.basename(path))[0]
         row = {"mesh": name, "signal": signal}
-        for use in USES:
+        for use in a.uses:
             obj = os.path.join(a.out, f"{name}_{signal}_{use}.obj")
             tex = os.path.join(a.out, f"{name}_{signal}_{use}.png")
             out, seconds = run([a.bin, "--threads", str(a.threads), "--json", "-q", "atlas", path, "-o", obj,
                                 "--width", str(a.res), "--height", str(a.res), "--signal", signal,
-                                "--signal-use", use, "--sae-res", str(a.res), "--signal-texture-out", tex])
+                                "--signal-use", use, "--sae-res", str(a.res), "--signal-texture-out", tex] +
+                               (["--beta", str(a.beta)] if a.beta is not None else []))
             j = json.loads(out)
             row[use] = {"sae": j["sae"], "signal_stretch": j["signal"]["signal_stretch"], "charts": j["charts"],
                         "l2": j["l2_stretch"], "linf": j["linf_stretch"], "flipped": j["flipped"],
@@ -129,6 +132,12 @@ def main():
     with open(os.path.join(a.out, "signal_bench.json"), "w") as f:
         json.dump(rows, f, indent=1)
 
+    if a.uses != USES:
+        for r in rows:
+            print(r["mesh"], r["signal"], " ".join(f"{u}: SAE {r[u]['sae']:.5f} charts {r[u]['charts']} "
+                                                  f"chart Linf {r[u]['chart_linf']:.2f} flipped+overlap "
+                                                  f"{r[u]['flipped'] + r[u]['overlapping_pairs']}" for u in a.uses))
+        return
     print(f"| mesh | signal | SAE geometric atlas | SAE geometric charts + signal param | "
           f"SAE signal charts + signal param | signal stretch (none / param / full) | charts (none / param / full) | "
           f"atlas Linf (none / param / full) | max chart Linf | flipped + overlapping pairs | "

@@ -12,8 +12,10 @@
 #include <sstream>
 #include <string>
 
+#include "../../libisochart/src/signal_distance.h"
 #include "isochart/builtin.h"
 #include "isochart/error.h"
+#include "isochart/geodesic.h"
 #include "isochart/stretch.h"
 
 using namespace isochart;
@@ -86,6 +88,92 @@ TEST_CASE("IMT of a mapped ramp texture matches its gradient", "[signal]") {
     // f = 0.1 + 0.5 x on the surface: |∇f|² = 0.25.
     CHECK(imt[f][0] + imt[f][2] == Approx(0.25 * area[f]).epsilon(1e-4));
   }
+}
+
+namespace {
+
+// Signal distances along the geodesics from `landmarks` on plane(n) for the scalar signal f.
+std::vector<double> plane_signal_rows(const Mesh& m, const std::vector<int>& landmarks,
+                                      double (*f)(double, double)) {
+  const GeodesicSolver solver(m);
+  const std::vector<double> rows = solver.distance_rows(landmarks);
+  return detail::geodesic_signal_distances(m.positions, m.faces, landmarks, rows,
+                                           scalar_signal(m, f).vertex_values, 1);
+}
+
+double ramp_x(double x, double) {
+  return x;
+}
+// A narrow hill of height 1 at the plane's centre, ~0 at its boundary.
+double hill(double x, double y) {
+  return std::exp(-((x - 0.5) * (x - 0.5) + (y - 0.5) * (y - 0.5)) / (2 * 0.1 * 0.1));
+}
+
+}  // namespace
+
+TEST_CASE("signal distance along geodesics equals the signal change on a linear ramp", "[signal]") {
+  const int n = 20;
+  const Mesh m = plane(n);
+  const int left = (n / 2) * (n + 1), centre = left + n / 2;  // (0, 0.5) and (0.5, 0.5)
+  const std::vector<double> s = plane_signal_rows(m, {left, centre}, ramp_x);
+  double worst_left = 0, worst_centre = 0;
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    const double x = m.positions[v].x;
+    REQUIRE(std::isfinite(s[v]));
+    // From the left edge every geodesic runs in +x: the sum of |Δf| is exactly Δx.
+    worst_left = std::max(worst_left, std::abs(s[v] - x));
+    // From the centre the geodesic crosses no extremum of f either: |x − 0.5|, up to the
+    // linear interpolation of the kink at x = 0.5 between the two upwind vertices.
+    worst_centre = std::max(worst_centre, std::abs(s[m.num_vertices() + v] - std::abs(x - 0.5)));
+  }
+  CHECK(worst_left < 1e-9);
+  CHECK(worst_centre < 0.5 / n);
+}
+
+TEST_CASE("signal distance follows the geodesic, not the path of least signal change", "[signal]") {
+  const int n = 40;
+  const Mesh m = plane(n);
+  const int left = (n / 2) * (n + 1), right = left + n;  // (0, 0.5) and (1, 0.5)
+  const std::vector<double> s = plane_signal_rows(m, {left}, hill);
+  // The geodesic is the straight line y = 0.5 over the top of the hill: up 1 and down 1.
+  const double expected = 2 - 2 * hill(0, 0.5);
+  CHECK(s[right] == Approx(expected).margin(0.02));
+  // The path of least signal change goes around the hill along the boundary, where f ≈ 0:
+  // summing over its edges gives almost nothing, which the old Dijkstra distance measured.
+  auto f_at = [&](int i, int j) { return hill(double(i) / n, double(j) / n); };
+  double around = 0;
+  for (int j = n / 2; j > 0; --j) around += std::abs(f_at(0, j) - f_at(0, j - 1));
+  for (int i = 0; i < n; ++i) around += std::abs(f_at(i + 1, 0) - f_at(i, 0));
+  for (int j = 0; j < n / 2; ++j) around += std::abs(f_at(n, j + 1) - f_at(n, j));
+  CHECK(around < 0.01);
+  // Every vertex gets the signal change along its own straight geodesic from the landmark, up
+  // to the smearing of s across neighbouring geodesics by its linear interpolation at the
+  // update's foot (largest beside the hill, where the neighbours' paths crossed its top). The
+  // scheme is first order: halving the edge length halves the error.
+  auto errors = [&](int k, double& worst, double& mean) {
+    const Mesh mk = plane(k);
+    const int lk = (k / 2) * (k + 1);
+    const std::vector<double> sk = plane_signal_rows(mk, {lk}, hill);
+    worst = mean = 0;
+    for (int v = 0; v < mk.num_vertices(); ++v) {
+      const Vec3d p = mk.positions[v];
+      double sum = 0, prev = hill(0, 0.5);
+      for (int i = 1; i <= 400; ++i) {
+        const double t = i / 400.0, cur = hill(t * p.x, 0.5 + t * (p.y - 0.5));
+        sum += std::abs(cur - prev);
+        prev = cur;
+      }
+      worst = std::max(worst, std::abs(sk[v] - sum));
+      mean += std::abs(sk[v] - sum) / mk.num_vertices();
+    }
+  };
+  double worst20, mean20, worst40, mean40;
+  errors(20, worst20, mean20);
+  errors(40, worst40, mean40);
+  CHECK(mean40 < 0.025);
+  CHECK(worst40 < 0.15);
+  CHECK(mean40 < 0.6 * mean20);
+  CHECK(worst40 < 0.6 * worst20);
 }
 
 TEST_CASE("signal stretch is 1 for an isometry and lower when texels follow the signal", "[signal]") {
