@@ -82,12 +82,8 @@ std::vector<double> geodesic_signal_distances(const std::vector<Vec3d>& position
     std::vector<char> done(stride, 0);
     std::vector<double> foot(static_cast<size_t>(dim));
     const int source = landmarks[k];
-    for (const auto& [dc, c] : order) {
-      done[c] = 1;
-      if (c == source || dc == 0) {
-        s[c] = 0;
-        continue;
-      }
+    // Returns false when no neighbour of c is visited yet.
+    auto update = [&](int c) {
       // The update that best explains d(C): an edge from a visited neighbour A, d(A) + |AC|,
       // or a triangle (C, A, B) with A and B visited, whose virtual point source at distances
       // d(A), d(B) sees C through the edge AB (foot at A + t·(B − A)).
@@ -138,13 +134,27 @@ std::vector<double> geodesic_signal_distances(const std::vector<Vec3d>& position
           ft = std::clamp(num / span, 0.0, 1.0);
         }
       }
-      if (fa < 0) continue;  // no visited neighbour: stays +inf (cannot happen on a connected chart)
+      if (fa < 0) return false;
       const double* va = value(fa);
       const double* vb = value(fb);
       for (int j = 0; j < dim; ++j) foot[j] = (1 - ft) * va[j] + ft * vb[j];
       const double s_foot = (1 - ft) * s[fa] + ft * s[fb];
       s[c] = s_foot + distance_between(value(c), foot.data(), dim);
+      done[c] = 1;
+      return true;
+    };
+    // A landmark's entries in other landmarks' rows are the mean of both directions, so one
+    // can come before all its neighbours: such vertices wait until the rest is visited.
+    std::vector<int> waiting;
+    for (const auto& [dc, c] : order) {
+      if (c == source || dc == 0) {
+        s[c] = 0;
+        done[c] = 1;
+      } else if (!update(c)) {
+        waiting.push_back(c);
+      }
     }
+    for (int c : waiting) update(c);
   };
   tbb::parallel_for(tbb::blocked_range<int>(0, q, 1), [&](const tbb::blocked_range<int>& r) {
     for (int k = r.begin(); k != r.end(); ++k) row_of(k);
