@@ -117,9 +117,9 @@ struct SignalAtlasOptions {
   /// geometric parameterization. The geometric Linf bound of AtlasOptions always holds.
   double max_geometric_l2 = 2.0;
   /// β of eq. 6 (Iso-charts §7): weight of the geodesic distance against the signal distance
-  /// in the distances the spectral analysis and the graph cut see (Full only; 1 = geometric).
-  /// The issue suggested 0.5; on bunny's normals 0.8 measured a lower SAE (bench/README.md).
-  double beta = 0.8;
+  /// (summed along the geodesic paths) in the distances the spectral analysis and the graph
+  /// cut see (Full only; 1 = geometric). The paper's 0.5 (bench/README.md, Signal section).
+  double beta = 0.5;
 };
 
 /// Per-atlas signal figures, alongside AtlasStats.
