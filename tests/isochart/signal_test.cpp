@@ -5,6 +5,7 @@
 #include <tbb/global_control.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -14,6 +15,7 @@
 
 #include "../../libisochart/src/signal_distance.h"
 #include "isochart/builtin.h"
+#include "isochart/embedding.h"
 #include "isochart/error.h"
 #include "isochart/geodesic.h"
 #include "isochart/stretch.h"
@@ -174,6 +176,47 @@ TEST_CASE("signal distance follows the geodesic, not the path of least signal ch
   CHECK(worst40 < 0.15);
   CHECK(mean40 < 0.6 * mean20);
   CHECK(worst40 < 0.6 * worst20);
+}
+
+TEST_CASE("the combined distance of eq. 6 mixes geodesic and geodesic-path signal distances", "[signal]") {
+  const int n = 20;
+  const Mesh m = plane(n);
+  std::vector<int> all(m.num_faces());
+  for (int f = 0; f < m.num_faces(); ++f) all[f] = f;
+  const detail::ChartGeometry g = detail::make_chart(m, all);
+  const GeodesicSolver solver(g.positions, g.tris);
+  EmbeddingOptions eo;
+  eo.landmarks = 30;
+  const Embedding geo = landmark_isomap(solver, eo);
+  std::vector<double> f(m.num_vertices()), flat(m.num_vertices(), 0.25);
+  for (int v = 0; v < m.num_vertices(); ++v) f[v] = hill(m.positions[v].x, m.positions[v].y);
+  // β = 1 or a constant signal: the geodesic embedding itself.
+  CHECK(detail::combined_embedding(g, geo, f, 1, 1.0).landmark_distances == geo.landmark_distances);
+  CHECK(detail::combined_embedding(g, geo, flat, 1, 0.5).landmark_distances == geo.landmark_distances);
+  const Embedding e = detail::combined_embedding(g, geo, f, 1, 0.5);
+  REQUIRE(e.dimensions >= 2);
+  std::vector<double> local(g.num_vertices());
+  for (int v = 0; v < g.num_vertices(); ++v) local[v] = f[g.vertex_parent[v]];
+  const std::vector<double> sig =
+      detail::geodesic_signal_distances(g.positions, g.tris, geo.landmarks, geo.landmark_distances, local, 1);
+  double sum_geo = 0, sum_sig = 0;
+  for (size_t i = 0; i < sig.size(); ++i) {
+    sum_geo += geo.landmark_distances[i];
+    sum_sig += sig[i];
+  }
+  // Off the landmark block (which embed_landmarks symmetrizes) every entry is eq. 6 in units
+  // of length: β·d_geo + (1 − β)·d_sig·avg_geo/avg_sig.
+  const int nv = g.num_vertices();
+  double worst = 0;
+  for (int k = 0; k < static_cast<int>(geo.landmarks.size()); ++k)
+    for (int v = 0; v < nv; ++v) {
+      if (std::find(geo.landmarks.begin(), geo.landmarks.end(), v) != geo.landmarks.end()) continue;
+      const size_t i = static_cast<size_t>(k) * nv + v;
+      const double want = 0.5 * geo.landmark_distances[i] + 0.5 * sig[i] * sum_geo / sum_sig;
+      worst = std::max(worst, std::abs(e.landmark_distances[i] - want));
+    }
+  CHECK(worst < 1e-12);
+  CHECK(e.landmark_distances != geo.landmark_distances);
 }
 
 TEST_CASE("signal stretch is 1 for an isometry and lower when texels follow the signal", "[signal]") {
