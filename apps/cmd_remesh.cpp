@@ -10,6 +10,7 @@
 #include "isochart/atlas.h"
 #include "isochart/builtin.h"
 #include "isochart/error.h"
+#include "isochart/signal.h"
 #include "mcgim/image_io.h"
 #include "mcgim/mcgim.h"
 #include "mcgim/psnr.h"
@@ -30,6 +31,9 @@ struct RemeshArgs {
   bool no_optimize = false;
   long long psnr_samples = 1'000'000;
   bool no_psnr = false;
+  std::string signal;
+  std::string signal_use = "param";
+  bool keep_chart_sizes = false;
 };
 
 nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
@@ -59,6 +63,8 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   const int modes = (a.res > 0) + (a.samples > 0) + (a.width > 0 || a.height > 0) + !a.levels.empty();
   if (modes > 1) bad_option("--res, --samples, --width/--height and --levels are exclusive");
   if ((a.width > 0) != (a.height > 0)) bad_option("--width and --height go together");
+  if (!a.signal.empty() && !a.atlas.empty()) bad_option("--signal builds the atlas; it does not go with --atlas");
+  if (a.signal_use != "param" && a.signal_use != "full") bad_option("--signal-use must be param or full");
   isochart::format_from_path(a.output);  // reject an unknown output extension before working
 
   const isochart::Mesh input = load_any(ctx, a.input);
@@ -71,6 +77,22 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     if (!atlas.has_uvs())
       throw isochart::InputError(a.atlas, "the atlas has no texture coordinates (vt)");
     atlas_json["source"] = a.atlas;
+  } else if (!a.signal.empty()) {
+    // A signal-specialized atlas of the geometry's own signal (normals): more samples where
+    // the surface bends, where linear reconstruction errs most.
+    isochart::AtlasOptions ao;
+    ao.seed = ctx.opts.seed;
+    isochart::SignalAtlasOptions so;
+    so.use = a.signal_use == "full" ? isochart::SignalUse::Full : isochart::SignalUse::Param;
+    const isochart::Signal signal = isochart::make_signal(input, a.signal, a.input);
+    isochart::SignalAtlasStats ss;
+    const isochart::Atlas built = isochart::build_signal_atlas(input, signal, ao, so, &ss, ctx.progress());
+    atlas = built.apply_to(input);
+    atlas_json["source"] = "iso-charts, signal " + a.signal + " (" + a.signal_use + ")";
+    atlas_json["charts"] = built.num_charts();
+    atlas_json["l2"] = built.stats.l2;
+    atlas_json["linf"] = built.stats.linf;
+    atlas_json["signal_stretch"] = ss.signal_stretch;
   } else {
     isochart::AtlasOptions ao;
     ao.seed = ctx.opts.seed;
@@ -95,6 +117,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
 
   mcgim::LevelOptions lo;
   lo.optimize = !a.no_optimize;
+  lo.keep_chart_sizes = a.keep_chart_sizes || !a.signal.empty();
   std::vector<std::array<int, 2>> sizes;
   nlohmann::json search;
   if (!a.levels.empty()) {
@@ -236,12 +259,22 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--psnr-samples", args->psnr_samples, "Points per surface for the PSNR (default 1000000)")
       ->check(CLI::Range(1LL, 1'000'000'000LL));
   sub->add_flag("--no-psnr", args->no_psnr, "Skip the distance measurement");
+  sub->add_option("--signal", args->signal,
+                  "Build a signal-specialized atlas for this signal (normals: samples follow the "
+                  "curvature; colors; texture:IMG) and keep its chart sizes");
+  sub->add_option("--signal-use", args->signal_use,
+                  "With --signal: param (geometric charts, signal parameterization; default) or full "
+                  "(signal charts too)");
+  sub->add_flag("--keep-chart-sizes", args->keep_chart_sizes,
+                "Re-pack with the atlas's relative chart sizes instead of one texel density (for "
+                "signal-specialized atlases given with --atlas)");
   sub->footer(
       "Each level is packed for its own resolution (gutter 1 texel), sampled, zippered and "
       "reconstructed; in a pyramid every sample is linked to the next coarser level by normal "
       "shooting. The PSNR compares the remesh with the atlas's surface.\n"
       "Examples:\n"
       "  isocharts remesh ../shared/data/meshes/horse.ply -o horse_gim.ply --samples 47000 --json\n"
+      "  isocharts remesh ../shared/data/meshes/horse.ply -o horse_sig.ply --samples 47000 --signal normals\n"
       "  isocharts remesh ../shared/data/meshes/bunny.obj -o bunny.ply --levels 256,128,64,32 --png bunny\n"
       "  isocharts remesh ../shared/data/meshes/bunny.obj -o bunny_xatlas.ply --res 256 \\\n"
       "      --atlas ../shared/data/baseline_atlases/bunny_xatlas.obj");

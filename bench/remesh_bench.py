@@ -102,22 +102,29 @@ def main():
 
     out()
     out("== About %d defined samples (iso-chart atlas vs the paper's Table II)" % a.samples)
-    out("%-18s %-9s %8s %8s %7s %7s %7s  %s" % ("mesh", "res", "defined", "unique", "PSNR", "mean", "paper", "topology"))
+    out("%-18s %-15s %-9s %8s %8s %7s %7s %7s  %s" % ("mesh", "atlas", "res", "defined", "unique", "PSNR", "mean",
+                                                    "paper", "topology"))
+    # The geometric iso-chart atlas, then the same charts parameterized and sized for the
+    # normal signal (`--signal normals`: samples follow the curvature).
+    variants = (("geometric", []), ("signal normals", ["--signal", "normals"]))
     for name in ("horse", "gargoyle", "feline"):
         files = [m for m in meshes if m.rsplit(".", 1)[0] == name]
         if not files:
             continue
-        rep = os.path.join(a.out, name + "_samples.json")
-        res, wall, err = run(a.cli, ["remesh", os.path.join(meshes_dir, files[0]), "-o",
-                                     os.path.join(a.out, name + "_samples.ply"), "--samples", str(a.samples)] + common,
-                             rep, a.threads)
-        if res is None:
-            out("%-18s ERROR %s" % (name, " ".join(err)))
-            continue
-        lv = res["levels"][0]
-        out("%-18s %-9s %8d %8d %7s %7s %7.1f  %s" % (
-            name, "%dx%d" % tuple(lv["resolution"]), lv["defined_samples"], lv["unique_vertices"], fmt_psnr(lv),
-            "%.2f" % lv["psnr_mean"] if lv.get("psnr_mean") is not None else "n/a", PAPER_TABLE_II[name], topo(lv)))
+        for label, extra in variants:
+            tag = name + ("_samples" if not extra else "_samples_signal")
+            rep = os.path.join(a.out, tag + ".json")
+            res, wall, err = run(a.cli, ["remesh", os.path.join(meshes_dir, files[0]), "-o",
+                                         os.path.join(a.out, tag + ".ply"), "--samples", str(a.samples)]
+                                 + extra + common, rep, a.threads)
+            if res is None:
+                out("%-18s %-15s ERROR %s" % (name, label, " ".join(err)))
+                continue
+            lv = res["levels"][0]
+            out("%-18s %-15s %-9s %8d %8d %7s %7s %7.1f  %s" % (
+                name, label, "%dx%d" % tuple(lv["resolution"]), lv["defined_samples"], lv["unique_vertices"],
+                fmt_psnr(lv), "%.2f" % lv["psnr_mean"] if lv.get("psnr_mean") is not None else "n/a",
+                PAPER_TABLE_II[name], topo(lv)))
 
     if not a.skip_baselines:
         out()

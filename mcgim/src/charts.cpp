@@ -489,13 +489,23 @@ Placement place_charts(const AtlasCharts& a, const LevelOptions& o, const std::v
     // The same packer for every atlas, ours or external: all charts at one texel density,
     // `gutter` texels apart. Mirrored charts are unmirrored first (the packer only rotates).
     std::vector<isochart::PackChart> pack(nc);
+    // The packer sizes charts by area_3d; keeping the atlas's sizes means handing it each
+    // chart's texture area in surface units (the total stays the surface area).
+    double total_3d = 0, total_uv = 0;
+    for (const Chart& ch : a.charts) {
+      total_3d += ch.area_3d;
+      total_uv += std::abs(ch.area_uv);
+    }
+    const bool keep = o.keep_chart_sizes && total_uv > 0 && total_3d > 0;
     for (int c = 0; c < nc; ++c) {
       const Chart& ch = a.charts[c];
       pack[c].uv = ch.uv;
       if (ch.area_uv < 0)
         for (Vec2d& uv : pack[c].uv) uv.x = -uv.x;
       pack[c].faces = ch.local_faces;
-      pack[c].area_3d = ch.area_3d * (area_scale.empty() ? 1.0 : area_scale[c]);
+      const double size =
+          keep && ch.area_uv != 0 ? std::abs(ch.area_uv) * (total_3d / total_uv) : ch.area_3d;
+      pack[c].area_3d = size * (area_scale.empty() ? 1.0 : area_scale[c]);
     }
     isochart::PackOptions po;
     po.width = o.width;

@@ -73,4 +73,21 @@ TEST_CASE("isocharts remesh writes watertight levels and reports them", "[mcgim]
   CHECK(run("remesh builtin:sphere -o " + (run.dir / "x.xyz").string()) == 2);
   CHECK(run("remesh builtin:sphere -o " + out + " --atlas builtin:torus") == 2);
   CHECK(run("remesh builtin:sphere -o " + out + " --res 1") == 2);
+  CHECK(run("remesh builtin:sphere -o " + out + " --signal normals --atlas " + out) == 2);
+  CHECK(run("remesh builtin:sphere -o " + out + " --signal normals --signal-use all") == 2);
+  CHECK(run("remesh builtin:sphere -o " + out + " --signal colors") == 2);  // no colours
+}
+
+TEST_CASE("isocharts remesh --signal builds a signal-specialized atlas", "[mcgim][cli]") {
+  const CliRun run("remesh_signal_test");
+  const std::string out = (run.dir / "torus.ply").string();
+  REQUIRE(run("remesh builtin:torus -o " + out + " --res 64 --psnr-samples 20000 --signal normals --json") == 0);
+  const nlohmann::json j = run.json();
+  CHECK(j["atlas"]["source"].get<std::string>().find("signal normals") != std::string::npos);
+  CHECK(j["atlas"]["signal_stretch"].get<double>() > 0);
+  const auto& lv = j["levels"][0];
+  CHECK(lv["closed"].get<bool>());
+  CHECK(lv["manifold"].get<bool>());
+  CHECK(lv["euler_preserved"].get<bool>());
+  CHECK(lv["psnr"].get<double>() > 30.0);
 }

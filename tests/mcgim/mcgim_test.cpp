@@ -358,6 +358,41 @@ TEST_CASE("re-packed levels keep charts apart and stay watertight", "[mcgim]") {
   CHECK(a.remesh.mesh.faces == b.remesh.mesh.faces);
 }
 
+TEST_CASE("re-packing can keep the atlas's relative chart sizes", "[mcgim]") {
+  // Cube face 0 gets twice the texture length of the others (four times the texture area),
+  // as a signal-specialized atlas gives busy charts more texels.
+  isochart::Mesh m = mcgim_test::cube_atlas(5);
+  std::vector<char> moved(m.uvs.size(), 0);
+  for (std::size_t f = 0; f < m.faces.size(); ++f)
+    if (m.face_groups[f] == 0)
+      for (int k = 0; k < 3; ++k) {
+        const int t = m.face_uvs[f][k];
+        if (!moved[t]) m.uvs[t] = m.uvs[t] * 2.0;
+        moved[t] = 1;
+      }
+  const auto samples_per_chart = [](const Level& lv) {
+    std::vector<int> n(lv.stats.charts, 0);
+    for (int c : lv.image.chart)
+      if (c >= 0) ++n[c];
+    return n;
+  };
+  LevelOptions o;
+  o.width = o.height = 96;
+  const Level same = build_level(m, o);
+  o.keep_chart_sizes = true;
+  const Level kept = build_level(m, o);
+  check_watertight(same, 2);
+  check_watertight(kept, 2);
+  const std::vector<int> a = samples_per_chart(same), b = samples_per_chart(kept);
+  REQUIRE(a.size() == 6);
+  REQUIRE(b.size() == 6);
+  // One texel density: chart 0 about as many samples as chart 1; kept sizes: about four times.
+  CHECK(std::abs(a[0] - a[1]) <= 0.1 * a[1]);
+  const double ratio = static_cast<double>(b[0]) / b[1];
+  CHECK(ratio > 3.3);
+  CHECK(ratio < 4.7);
+}
+
 TEST_CASE("a coarse level enlarges charts too small to keep the topology", "[mcgim]") {
   // At 32² the creature's 13 iso-charts get about 330 samples: packed at one density, two
   // small charts are contracted and the remesh pinches (Euler characteristic 3, a

@@ -28,6 +28,11 @@ struct LevelOptions {
   /// the atlas's own layout in [0,1]² is used as is and must keep charts ≥ 1 texel apart.
   bool repack = true;
   int gutter = 1;  ///< texels between charts when re-packing (≥ 1)
+  /// When re-packing, size each chart by its texture area in the input atlas (the atlas's
+  /// relative chart sizes kept) instead of its surface area (one texel density everywhere).
+  /// For signal-specialized atlases, whose packing gives charts with more signal variation
+  /// more texels (Iso-charts §7): the samples follow the signal, not just the area.
+  bool keep_chart_sizes = false;
   /// Move the samples (welded groups together) towards the original surface after
   /// zippering (Sander et al. 2003's final optimization): least-squares fits of the
   /// reconstructed surface to points of the original surface, with a pull towards the sampled
