@@ -59,11 +59,16 @@ inline bool metric(const FlatTriangle& q, const Vec2d& p0, const Vec2d& p1, cons
   return true;
 }
 
-// Normalized max(Γ, 1/γ) given the tensor and k² = (UV area / 3D area) of the whole chart.
-inline double linf_of(double a, double b, double c, double k2) {
+// Normalized max(Γ, 1/γ), given the tensor and k² = (UV area / 3D area) of the whole chart,
+// where it can exceed `tau`, and 0 where it certainly does not (hi = tau²(1 − 1e−9),
+// lo = (1 + 1e−9)/tau²): the optimizer only compares Linf with tau and uses values above it,
+// and most triangles of a chart are far inside the bound, so their two square roots and a
+// division (the hottest instructions of a sweep) are skipped without changing any decision.
+inline double linf_above(double a, double b, double c, double k2, double hi, double lo) {
   const double disc = std::sqrt((a - c) * (a - c) + 4 * b * b);
   const double g2max = 0.5 * (a + c + disc) * k2;
   const double g2min = std::max(0.5 * (a + c - disc), 0.0) * k2;
+  if (g2max <= hi && g2min >= lo) return 0.0;
   const double big = std::sqrt(g2max);
   const double shrink = g2min > 0 ? 1.0 / std::sqrt(g2min) : kInf;
   return std::max(big, shrink);
@@ -72,13 +77,12 @@ inline double linf_of(double a, double b, double c, double k2) {
 class Optimizer {
  public:
   Optimizer(const std::vector<Vec3d>& positions, const std::vector<Face>& faces, std::vector<Vec2d>& uv,
-            const OptimizeOptions& o)
-      : faces_(faces), uv_(uv), o_(o), rng_(o.seed) {
+            const OptimizeOptions& o, const Topology& topology)
+      : faces_(faces), uv_(uv), o_(o), rng_(o.seed), topo_(topology) {
     const int nf = static_cast<int>(faces.size());
     flat_.resize(nf);
     for (int f = 0; f < nf; ++f)
       flat_[f] = flatten(positions[faces[f][0]], positions[faces[f][1]], positions[faces[f][2]]);
-    topo_ = Topology(faces, static_cast<int>(uv.size()));
     area3_ = 0;
     for (const auto& t : flat_) area3_ += t.area;
     marea_ = area3_;
@@ -90,6 +94,10 @@ class Optimizer {
       }
     }
     tau_ = o.linf_margin * o.max_linf;
+    if (tau_ > 0 && std::isfinite(tau_)) {
+      tau_hi_ = tau_ * tau_ * (1 - 1e-9);
+      tau_lo_ = (1 + 1e-9) / (tau_ * tau_);
+    }
     init_boundary();
     recompute_sums();
   }
@@ -104,6 +112,7 @@ class Optimizer {
     for (int pass = 0; pass < o_.passes && valid_; ++pass) {
       // Worst vertices first (§6).
       std::vector<std::pair<double, int>> order;
+      face_terms();
       for (int v = 0; v < static_cast<int>(uv_.size()); ++v) {
         if (!topo_.is_referenced(v)) continue;
         double l2, linf;
@@ -154,26 +163,47 @@ class Optimizer {
       double a, b, c, ar;
       const Face& F = faces_[f];
       if (flat_[f].area <= 0 || !metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar)) continue;
-      const double li = linf_of(a, b, c, k2_);
+      const double li = linf_above(a, b, c, k2_, tau_hi_, tau_lo_);
       if (li > tau_) pen_ += flat_[f].area * (li - tau_) * (li - tau_);
     }
   }
 
-  // Normalized L2 and max Linf over the faces around v.
+  // Per-face terms of ring_stretch for the current layout: a sweep's ordering visits every face
+  // from each of its three corners, so they are computed once per sweep.
+  void face_terms() {
+    const int nf = static_cast<int>(faces_.size());
+    terms_.resize(nf);
+    for (int f = 0; f < nf; ++f) {
+      FaceTerm& t = terms_[f];
+      t.state = FaceTerm::kSkip;
+      if (flat_[f].area <= 0) continue;
+      const Face& F = faces_[f];
+      double a, b, c, ar, tr;
+      if (!metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar, face_g(f), &tr)) {
+        t.state = FaceTerm::kFlipped;
+        continue;
+      }
+      t.state = FaceTerm::kValid;
+      t.num = flat_[f].area * 0.5 * tr * k2m_;
+      t.den = flat_[f].area * metric_weight(f);
+      t.linf = linf_above(a, b, c, k2_, tau_hi_, tau_lo_);
+    }
+  }
+
+  // Normalized L2 and max Linf over the faces around v (from the terms of face_terms()).
   void ring_stretch(int v, double& l2, double& linf) const {
     double num = 0, den = 0;
     linf = 0;
     for (int f : topo_.vertex_faces(v)) {
-      const Face& F = faces_[f];
-      double a, b, c, ar, tr;
-      if (flat_[f].area <= 0) continue;
-      if (!metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar, face_g(f), &tr)) {
+      const FaceTerm& t = terms_[f];
+      if (t.state == FaceTerm::kSkip) continue;
+      if (t.state == FaceTerm::kFlipped) {
         linf = kInf;
         continue;
       }
-      num += flat_[f].area * 0.5 * tr * k2m_;
-      den += flat_[f].area * metric_weight(f);
-      linf = std::max(linf, linf_of(a, b, c, k2_));
+      num += t.num;
+      den += t.den;
+      linf = std::max(linf, t.linf);
     }
     l2 = den > 0 ? std::sqrt(num / den) : 0;
   }
@@ -197,7 +227,7 @@ class Optimizer {
       if (!metric(flat_[f], p0, p1, p2, a, b, c, ar, face_g(f), &tr)) return false;
       s1 += flat_[f].area * 0.5 * tr;
       s2 += ar;
-      const double li = linf_of(a, b, c, k2_);
+      const double li = linf_above(a, b, c, k2_, tau_hi_, tau_lo_);
       if (li > tau_) pen += flat_[f].area * (li - tau_) * (li - tau_);
     }
     return true;
@@ -439,8 +469,15 @@ class Optimizer {
   OptimizeOptions o_;
   Rng rng_;
   std::vector<FlatTriangle> flat_;
-  Topology topo_;
+  const Topology& topo_;
+  struct FaceTerm {
+    enum State : unsigned char { kSkip, kFlipped, kValid } state = kSkip;
+    double num = 0, den = 0, linf = 0;
+  };
+  std::vector<FaceTerm> terms_;
   double area3_ = 0, s1_ = 0, s2_ = 0, pen_ = 0, k2_ = 1, tau_ = 0;
+  // Squared Linf bounds of linf_above: -1 and +inf (always exact) unless tau_ is positive.
+  double tau_hi_ = -1, tau_lo_ = kInf;
   double marea_ = 0, k2m_ = 1;  // metric area and UV area / metric area (signal metric)
   bool valid_ = true;
   std::vector<int> bprev_, bnext_;
@@ -469,7 +506,10 @@ std::vector<Vec2d> clip_left(const std::vector<Vec2d>& poly, const Vec2d& a, con
 }  // namespace
 
 int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, int max_passes) {
-  const Topology topo(faces, static_cast<int>(uv.size()));
+  return untangle(faces, uv, Topology(faces, static_cast<int>(uv.size())), max_passes);
+}
+
+int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, const Topology& topo, int max_passes) {
   auto flipped = [&](int f) {
     const Face& t = faces[f];
     return !(signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) > 0);
@@ -531,12 +571,17 @@ int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, int max_pas
 
 OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
                                 std::vector<Vec2d>& uv, const OptimizeOptions& options) {
+  return optimize_stretch(positions, faces, uv, options, Topology(faces, static_cast<int>(uv.size())));
+}
+
+OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
+                                std::vector<Vec2d>& uv, const OptimizeOptions& options, const Topology& topology) {
   OptimizeResult r;
   if (!options.face_metric.empty() && options.face_metric.size() != faces.size())
     throw Error("optimize_stretch: face_metric has " + std::to_string(options.face_metric.size()) +
                 " entries for " + std::to_string(faces.size()) + " faces");
   r.before = measure_stretch(positions, faces, uv);
-  Optimizer opt(positions, faces, uv, options);
+  Optimizer opt(positions, faces, uv, options, topology);
   if (opt.valid()) {
     const OptimizeResult run = opt.run();
     r.moves = run.moves;
@@ -551,7 +596,7 @@ OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::
     repair.vertex_l2_threshold = std::numeric_limits<double>::infinity();  // Linf violators only
     repair.give_up_l2 = 0;
     repair.seed = options.seed + 1;
-    Optimizer fix(positions, faces, uv, repair);
+    Optimizer fix(positions, faces, uv, repair, topology);
     const OptimizeResult run = fix.run();
     r.moves += run.moves;
     r.sweeps += run.sweeps;
