@@ -454,7 +454,10 @@ class Builder {
       out.chart.param = std::move(param);
       return true;
     };
-    detail::ChartParam p = detail::parameterize(cg, start, po);
+    // A single boundary loop needs no slit: the chart is unchanged and so is its topology.
+    detail::ParamOptions cut_po = po;
+    if (topo.boundary_loops().size() == 1) cut_po.topology = &topo;
+    detail::ChartParam p = detail::parameterize(cg, start, cut_po);
     out.times.optimization += p.optimize_seconds;
     if (p.accepted) return accept(cg, p);
     // A sock (a tube closed at one end, like a leg) folds onto itself in any flat start.

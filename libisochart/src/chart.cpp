@@ -427,7 +427,8 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
   if (o.face_metric) opt.face_metric = chart_metric(g, *o.face_metric);
   double seconds = 0;
   // Every start of this chart is untangled, optimized and (for LSCM) pinned on one topology.
-  const Topology topo(g.tris, g.num_vertices());
+  const Topology own = o.topology ? Topology() : Topology(g.tris, g.num_vertices());
+  const Topology& topo = o.topology ? *o.topology : own;
   auto attempt = [&](std::vector<Vec2d> uv, const char* method) {
     ChartParam p;
     p.method = method;

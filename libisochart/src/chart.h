@@ -73,6 +73,8 @@ struct ParamOptions {
   /// then measured in it, and its geometric L2 must still meet max_geometric_l2.
   const std::vector<std::array<double, 3>>* face_metric = nullptr;
   double max_geometric_l2 = 2.0;
+  /// The chart's topology if the caller has it, or null (then it is built once per call).
+  const Topology* topology = nullptr;
 };
 
 struct ChartParam {
