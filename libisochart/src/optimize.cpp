@@ -210,27 +210,43 @@ class Optimizer {
 
   // Objective change terms for vertex v at position x: returns ring sums of the L2 numerator, the
   // UV area and the Linf penalty; false when a ring triangle would flip.
-  bool ring_terms(int v, const Vec2d& x, double& s1, double& s2, double& pen) const {
+  bool ring_terms(const Vec2d& x, double& s1, double& s2, double& pen) const {
     s1 = s2 = pen = 0;
-    for (int f : topo_.vertex_faces(v)) {
-      const Face& F = faces_[f];
-      const Vec2d p0 = F[0] == v ? x : uv_[F[0]];
-      const Vec2d p1 = F[1] == v ? x : uv_[F[1]];
-      const Vec2d p2 = F[2] == v ? x : uv_[F[2]];
+    for (const RingFace& r : ring_) {
+      const Vec2d p0 = r.is_v[0] ? x : r.p[0];
+      const Vec2d p1 = r.is_v[1] ? x : r.p[1];
+      const Vec2d p2 = r.is_v[2] ? x : r.p[2];
       double a, b, c, ar;
-      if (flat_[f].area <= 0) {
+      if (r.flat.area <= 0) {
         if (signed_area(p0, p1, p2) <= 0) return false;
         s2 += signed_area(p0, p1, p2);
         continue;
       }
       double tr;
-      if (!metric(flat_[f], p0, p1, p2, a, b, c, ar, face_g(f), &tr)) return false;
-      s1 += flat_[f].area * 0.5 * tr;
+      if (!metric(r.flat, p0, p1, p2, a, b, c, ar, r.g, &tr)) return false;
+      s1 += r.flat.area * 0.5 * tr;
       s2 += ar;
       const double li = linf_above(a, b, c, k2_, tau_hi_, tau_lo_);
-      if (li > tau_) pen += flat_[f].area * (li - tau_) * (li - tau_);
+      if (li > tau_) pen += r.flat.area * (li - tau_) * (li - tau_);
     }
     return true;
+  }
+
+  // The faces around v with their fixed corners, gathered once per vertex: a line search
+  // evaluates the ring some hundred times while only v moves.
+  void gather_ring(int v) {
+    ring_.clear();
+    for (int f : topo_.vertex_faces(v)) {
+      const Face& F = faces_[f];
+      RingFace r;
+      r.flat = flat_[f];
+      r.g = face_g(f);
+      for (int k = 0; k < 3; ++k) {
+        r.is_v[k] = F[k] == v;
+        r.p[k] = uv_[F[k]];
+      }
+      ring_.push_back(r);
+    }
   }
 
   // Global objective if the ring sums (s1, s2, pen) replaced the current ones (r1, r2, rpen).
@@ -278,7 +294,8 @@ class Optimizer {
   bool optimize_vertex(int v) {
     double r1, r2, rpen;
     const Vec2d x0 = uv_[v];
-    if (!ring_terms(v, x0, r1, r2, rpen)) return false;
+    gather_ring(v);
+    if (!ring_terms(x0, r1, r2, rpen)) return false;
     const double f0 = objective(r1, r2, rpen, r1, r2, rpen);
     double best = f0;
     Vec2d best_x = x0;
@@ -291,7 +308,7 @@ class Optimizer {
       kernel_segment(v, best_x, d, lo, hi);
       if (!(hi > lo) || hi - lo < 1e-300) continue;
       auto eval = [&](double t, double& s1, double& s2, double& pen) {
-        if (!ring_terms(v, best_x + d * t, s1, s2, pen)) return kInf;
+        if (!ring_terms(best_x + d * t, s1, s2, pen)) return kInf;
         if (!boundary_ok(v, best_x + d * t)) return kInf;
         return objective(s1, s2, pen, r1, r2, rpen);
       };
@@ -475,6 +492,13 @@ class Optimizer {
     double num = 0, den = 0, linf = 0;
   };
   std::vector<FaceTerm> terms_;
+  struct RingFace {
+    FlatTriangle flat;
+    const std::array<double, 3>* g;
+    Vec2d p[3];       // corner positions, v's own unused
+    bool is_v[3];
+  };
+  std::vector<RingFace> ring_;
   double area3_ = 0, s1_ = 0, s2_ = 0, pen_ = 0, k2_ = 1, tau_ = 0;
   // Squared Linf bounds of linf_above: -1 and +inf (always exact) unless tau_ is positive.
   double tau_hi_ = -1, tau_lo_ = kInf;
