@@ -4,6 +4,7 @@
 #include "isochart/atlas.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_for_each.h>
 
 #include <algorithm>
 #include <atomic>
@@ -61,6 +62,8 @@ struct DoneChart {
 struct Work {
   std::vector<int> faces;
   int depth = 0;
+  std::vector<int> path;     // part indices from the root of the recursion
+  bool force_split = false;  // --max-charts: split even if the chart meets the bounds
 };
 
 // What processing one chart produced: either an accepted parameterization or parts to recurse on.
@@ -111,7 +114,7 @@ class Builder {
         return a.param.l2 < b.param.l2;
       });
       if (worst == done.end() || worst->geometry.num_faces() < 2) break;
-      std::vector<Work> q{Work{worst->geometry.faces, 1}};
+      std::vector<Work> q{Work{worst->geometry.faces, 1, {}, false}};
       done.erase(worst);
       std::vector<DoneChart> more = recurse(std::move(q), true);
       for (auto& c : more) done.push_back(std::move(c));
@@ -146,33 +149,52 @@ class Builder {
   }
 
  private:
-  // Processes charts generation by generation; charts of a generation run in parallel and their
-  // results are collected in queue order, so the output never depends on the thread count.
+  // Processes charts as a tree of tasks: a part is queued as soon as its parent is split, so a
+  // core never waits for the slowest chart of a generation (the serial optimizer and clustering
+  // of one large chart used to leave the other core idle). Every chart carries its path in the
+  // tree, and the finished charts are ordered as a generation-by-generation traversal would
+  // list them (by path length, then path); processing a chart depends only on its faces, depth
+  // and the forced split, so the output never depends on the thread count.
   std::vector<DoneChart> recurse(std::vector<Work> queue, bool force_first_split) {
-    std::vector<DoneChart> done;
-    bool force = force_first_split;
-    while (!queue.empty()) {
-      std::vector<Outcome> out(queue.size());
-      tbb::parallel_for(size_t(0), queue.size(), [&](size_t i) { out[i] = process(queue[i], force); });
-      force = false;
-      std::vector<Work> next;
-      for (size_t i = 0; i < out.size(); ++i) {
-        Outcome& r = out[i];
+    for (size_t i = 0; i < queue.size(); ++i) {
+      queue[i].path = {static_cast<int>(i)};
+      queue[i].force_split = force_first_split;
+    }
+    std::mutex mutex;
+    std::vector<std::pair<std::vector<int>, DoneChart>> done;
+    tbb::parallel_for_each(queue.begin(), queue.end(), [&](const Work& w, tbb::feeder<Work>& feeder) {
+      Outcome r = process(w, w.force_split);
+      long long accepted_faces;
+      {
+        const std::lock_guard<std::mutex> lock(mutex);
         times_.add(r.times);
         if (r.accepted) {
           accepted_faces_ += r.chart.geometry.num_faces();
-          done.push_back(std::move(r.chart));
+          done.emplace_back(w.path, std::move(r.chart));
         } else {
           ++splits_;
-          // Separating disconnected pieces is not a subdivision: they keep their depth.
-          const int depth = queue[i].depth + (r.components_only ? 0 : 1);
-          for (auto& p : r.parts) next.push_back(Work{std::move(p), depth});
         }
+        accepted_faces = accepted_faces_;
       }
-      report(progress_, Stage::Clustering, static_cast<double>(accepted_faces_) / std::max(1, mesh_.num_faces()));
-      queue.swap(next);
-    }
-    return done;
+      if (r.accepted) {
+        report(progress_, Stage::Clustering, static_cast<double>(accepted_faces) / std::max(1, mesh_.num_faces()));
+        return;
+      }
+      // Separating disconnected pieces is not a subdivision: they keep their depth.
+      const int depth = w.depth + (r.components_only ? 0 : 1);
+      for (size_t j = 0; j < r.parts.size(); ++j) {
+        Work child{std::move(r.parts[j]), depth, w.path, false};
+        child.path.push_back(static_cast<int>(j));
+        feeder.add(std::move(child));
+      }
+    });
+    std::sort(done.begin(), done.end(), [](const auto& a, const auto& b) {
+      return a.first.size() != b.first.size() ? a.first.size() < b.first.size() : a.first < b.first;
+    });
+    std::vector<DoneChart> charts;
+    charts.reserve(done.size());
+    for (auto& d : done) charts.push_back(std::move(d.second));
+    return charts;
   }
 
   std::uint64_t chart_seed(const std::vector<int>& faces) const {
@@ -432,7 +454,10 @@ class Builder {
       out.chart.param = std::move(param);
       return true;
     };
-    detail::ChartParam p = detail::parameterize(cg, start, po);
+    // A single boundary loop needs no slit: the chart is unchanged and so is its topology.
+    detail::ParamOptions cut_po = po;
+    if (topo.boundary_loops().size() == 1) cut_po.topology = &topo;
+    detail::ChartParam p = detail::parameterize(cg, start, cut_po);
     out.times.optimization += p.optimize_seconds;
     if (p.accepted) return accept(cg, p);
     // A sock (a tube closed at one end, like a leg) folds onto itself in any flat start.

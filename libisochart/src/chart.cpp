@@ -223,9 +223,10 @@ void open_slits(const ChartGeometry& g, const std::vector<int>& origin, std::vec
     if (copies[origin[v]] > 1 && count[v] > 0) uv[v] += (pull[v] / count[v] - uv[v]) * 0.01;
 }
 
-bool lscm(const ChartGeometry& g, std::vector<Vec2d>& uv) {
+bool lscm(const ChartGeometry& g, std::vector<Vec2d>& uv, const Topology* given) {
   const int nv = g.num_vertices();
-  const Topology topo(g.tris, nv);
+  const Topology own = given ? Topology() : Topology(g.tris, nv);
+  const Topology& topo = given ? *given : own;
   if (topo.boundary_loops().empty()) return false;
   // Pin the two boundary vertices farthest apart (approximately: farthest from the first, then
   // farthest from that one).
@@ -425,6 +426,9 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
   opt.give_up_l2 = o.max_l2;
   if (o.face_metric) opt.face_metric = chart_metric(g, *o.face_metric);
   double seconds = 0;
+  // Every start of this chart is untangled, optimized and (for LSCM) pinned on one topology.
+  const Topology own = o.topology ? Topology() : Topology(g.tris, g.num_vertices());
+  const Topology& topo = o.topology ? *o.topology : own;
   auto attempt = [&](std::vector<Vec2d> uv, const char* method) {
     ChartParam p;
     p.method = method;
@@ -435,11 +439,11 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
     const auto t0 = std::chrono::steady_clock::now();
     // IsoMap folds a few triangles now and then (§4.2); a heavily folded start means the
     // chart is far from flat and will be split anyway.
-    if (flips > 0 && p.initial_flip_fraction <= kMaxUntangleFraction) untangle(g.tris, uv);
+    if (flips > 0 && p.initial_flip_fraction <= kMaxUntangleFraction) untangle(g.tris, uv, topo);
     p.uv = std::move(uv);
     p.initial_l2 = trimmed_l2(g, p.uv, 0.02);
     // Optimization lowers L2 by a few tenths at most: far worse starts are not worth it.
-    if (p.initial_l2 <= kHopelessL2 * o.max_l2) optimize_stretch(g.positions, g.tris, p.uv, opt);
+    if (p.initial_l2 <= kHopelessL2 * o.max_l2) optimize_stretch(g.positions, g.tris, p.uv, opt, topo);
     p.optimize_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     seconds += p.optimize_seconds;
     evaluate(g, p, o);
@@ -456,7 +460,7 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
                                                       (best.flipped > 0 || best.overlaps || near_miss)));
   }
   std::vector<Vec2d> uv;
-  if (try_lscm && lscm(g, uv)) {
+  if (try_lscm && lscm(g, uv, &topo)) {
     ChartParam p = attempt(std::move(uv), "lscm");
     if (p.accepted || violation(p, o) < violation(best, o)) best = std::move(p);
   }

@@ -73,6 +73,8 @@ struct ParamOptions {
   /// then measured in it, and its geometric L2 must still meet max_geometric_l2.
   const std::vector<std::array<double, 3>>* face_metric = nullptr;
   double max_geometric_l2 = 2.0;
+  /// The chart's topology if the caller has it, or null (then it is built once per call).
+  const Topology* topology = nullptr;
 };
 
 struct ChartParam {
@@ -99,7 +101,8 @@ std::vector<Vec2d> isomap_uv(const Embedding& e);
 
 /// Least squares conformal map (Lévy et al. 2002) with the two farthest boundary vertices pinned.
 /// Returns false if the system cannot be solved.
-bool lscm(const ChartGeometry& g, std::vector<Vec2d>& uv);
+/// `topo` may pass g's topology to save rebuilding it.
+bool lscm(const ChartGeometry& g, std::vector<Vec2d>& uv, const Topology* topo = nullptr);
 
 /// Accepted = disk topology (checked by the caller), no flip, no overlap, both bounds met.
 void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o);

@@ -59,11 +59,16 @@ inline bool metric(const FlatTriangle& q, const Vec2d& p0, const Vec2d& p1, cons
   return true;
 }
 
-// Normalized max(Γ, 1/γ) given the tensor and k² = (UV area / 3D area) of the whole chart.
-inline double linf_of(double a, double b, double c, double k2) {
+// Normalized max(Γ, 1/γ), given the tensor and k² = (UV area / 3D area) of the whole chart,
+// where it can exceed `tau`, and 0 where it certainly does not (hi = tau²(1 − 1e−9),
+// lo = (1 + 1e−9)/tau²): the optimizer only compares Linf with tau and uses values above it,
+// and most triangles of a chart are far inside the bound, so their two square roots and a
+// division (the hottest instructions of a sweep) are skipped without changing any decision.
+inline double linf_above(double a, double b, double c, double k2, double hi, double lo) {
   const double disc = std::sqrt((a - c) * (a - c) + 4 * b * b);
   const double g2max = 0.5 * (a + c + disc) * k2;
   const double g2min = std::max(0.5 * (a + c - disc), 0.0) * k2;
+  if (g2max <= hi && g2min >= lo) return 0.0;
   const double big = std::sqrt(g2max);
   const double shrink = g2min > 0 ? 1.0 / std::sqrt(g2min) : kInf;
   return std::max(big, shrink);
@@ -72,13 +77,12 @@ inline double linf_of(double a, double b, double c, double k2) {
 class Optimizer {
  public:
   Optimizer(const std::vector<Vec3d>& positions, const std::vector<Face>& faces, std::vector<Vec2d>& uv,
-            const OptimizeOptions& o)
-      : faces_(faces), uv_(uv), o_(o), rng_(o.seed) {
+            const OptimizeOptions& o, const Topology& topology)
+      : faces_(faces), uv_(uv), o_(o), rng_(o.seed), topo_(topology) {
     const int nf = static_cast<int>(faces.size());
     flat_.resize(nf);
     for (int f = 0; f < nf; ++f)
       flat_[f] = flatten(positions[faces[f][0]], positions[faces[f][1]], positions[faces[f][2]]);
-    topo_ = Topology(faces, static_cast<int>(uv.size()));
     area3_ = 0;
     for (const auto& t : flat_) area3_ += t.area;
     marea_ = area3_;
@@ -90,6 +94,10 @@ class Optimizer {
       }
     }
     tau_ = o.linf_margin * o.max_linf;
+    if (tau_ > 0 && std::isfinite(tau_)) {
+      tau_hi_ = tau_ * tau_ * (1 - 1e-9);
+      tau_lo_ = (1 + 1e-9) / (tau_ * tau_);
+    }
     init_boundary();
     recompute_sums();
   }
@@ -104,6 +112,7 @@ class Optimizer {
     for (int pass = 0; pass < o_.passes && valid_; ++pass) {
       // Worst vertices first (§6).
       std::vector<std::pair<double, int>> order;
+      face_terms();
       for (int v = 0; v < static_cast<int>(uv_.size()); ++v) {
         if (!topo_.is_referenced(v)) continue;
         double l2, linf;
@@ -154,53 +163,90 @@ class Optimizer {
       double a, b, c, ar;
       const Face& F = faces_[f];
       if (flat_[f].area <= 0 || !metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar)) continue;
-      const double li = linf_of(a, b, c, k2_);
+      const double li = linf_above(a, b, c, k2_, tau_hi_, tau_lo_);
       if (li > tau_) pen_ += flat_[f].area * (li - tau_) * (li - tau_);
     }
   }
 
-  // Normalized L2 and max Linf over the faces around v.
+  // Per-face terms of ring_stretch for the current layout: a sweep's ordering visits every face
+  // from each of its three corners, so they are computed once per sweep.
+  void face_terms() {
+    const int nf = static_cast<int>(faces_.size());
+    terms_.resize(nf);
+    for (int f = 0; f < nf; ++f) {
+      FaceTerm& t = terms_[f];
+      t.state = FaceTerm::kSkip;
+      if (flat_[f].area <= 0) continue;
+      const Face& F = faces_[f];
+      double a, b, c, ar, tr;
+      if (!metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar, face_g(f), &tr)) {
+        t.state = FaceTerm::kFlipped;
+        continue;
+      }
+      t.state = FaceTerm::kValid;
+      t.num = flat_[f].area * 0.5 * tr * k2m_;
+      t.den = flat_[f].area * metric_weight(f);
+      t.linf = linf_above(a, b, c, k2_, tau_hi_, tau_lo_);
+    }
+  }
+
+  // Normalized L2 and max Linf over the faces around v (from the terms of face_terms()).
   void ring_stretch(int v, double& l2, double& linf) const {
     double num = 0, den = 0;
     linf = 0;
     for (int f : topo_.vertex_faces(v)) {
-      const Face& F = faces_[f];
-      double a, b, c, ar, tr;
-      if (flat_[f].area <= 0) continue;
-      if (!metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar, face_g(f), &tr)) {
+      const FaceTerm& t = terms_[f];
+      if (t.state == FaceTerm::kSkip) continue;
+      if (t.state == FaceTerm::kFlipped) {
         linf = kInf;
         continue;
       }
-      num += flat_[f].area * 0.5 * tr * k2m_;
-      den += flat_[f].area * metric_weight(f);
-      linf = std::max(linf, linf_of(a, b, c, k2_));
+      num += t.num;
+      den += t.den;
+      linf = std::max(linf, t.linf);
     }
     l2 = den > 0 ? std::sqrt(num / den) : 0;
   }
 
   // Objective change terms for vertex v at position x: returns ring sums of the L2 numerator, the
   // UV area and the Linf penalty; false when a ring triangle would flip.
-  bool ring_terms(int v, const Vec2d& x, double& s1, double& s2, double& pen) const {
+  bool ring_terms(const Vec2d& x, double& s1, double& s2, double& pen) const {
     s1 = s2 = pen = 0;
-    for (int f : topo_.vertex_faces(v)) {
-      const Face& F = faces_[f];
-      const Vec2d p0 = F[0] == v ? x : uv_[F[0]];
-      const Vec2d p1 = F[1] == v ? x : uv_[F[1]];
-      const Vec2d p2 = F[2] == v ? x : uv_[F[2]];
+    for (const RingFace& r : ring_) {
+      const Vec2d p0 = r.is_v[0] ? x : r.p[0];
+      const Vec2d p1 = r.is_v[1] ? x : r.p[1];
+      const Vec2d p2 = r.is_v[2] ? x : r.p[2];
       double a, b, c, ar;
-      if (flat_[f].area <= 0) {
+      if (r.flat.area <= 0) {
         if (signed_area(p0, p1, p2) <= 0) return false;
         s2 += signed_area(p0, p1, p2);
         continue;
       }
       double tr;
-      if (!metric(flat_[f], p0, p1, p2, a, b, c, ar, face_g(f), &tr)) return false;
-      s1 += flat_[f].area * 0.5 * tr;
+      if (!metric(r.flat, p0, p1, p2, a, b, c, ar, r.g, &tr)) return false;
+      s1 += r.flat.area * 0.5 * tr;
       s2 += ar;
-      const double li = linf_of(a, b, c, k2_);
-      if (li > tau_) pen += flat_[f].area * (li - tau_) * (li - tau_);
+      const double li = linf_above(a, b, c, k2_, tau_hi_, tau_lo_);
+      if (li > tau_) pen += r.flat.area * (li - tau_) * (li - tau_);
     }
     return true;
+  }
+
+  // The faces around v with their fixed corners, gathered once per vertex: a line search
+  // evaluates the ring some hundred times while only v moves.
+  void gather_ring(int v) {
+    ring_.clear();
+    for (int f : topo_.vertex_faces(v)) {
+      const Face& F = faces_[f];
+      RingFace r;
+      r.flat = flat_[f];
+      r.g = face_g(f);
+      for (int k = 0; k < 3; ++k) {
+        r.is_v[k] = F[k] == v;
+        r.p[k] = uv_[F[k]];
+      }
+      ring_.push_back(r);
+    }
   }
 
   // Global objective if the ring sums (s1, s2, pen) replaced the current ones (r1, r2, rpen).
@@ -248,7 +294,8 @@ class Optimizer {
   bool optimize_vertex(int v) {
     double r1, r2, rpen;
     const Vec2d x0 = uv_[v];
-    if (!ring_terms(v, x0, r1, r2, rpen)) return false;
+    gather_ring(v);
+    if (!ring_terms(x0, r1, r2, rpen)) return false;
     const double f0 = objective(r1, r2, rpen, r1, r2, rpen);
     double best = f0;
     Vec2d best_x = x0;
@@ -261,7 +308,7 @@ class Optimizer {
       kernel_segment(v, best_x, d, lo, hi);
       if (!(hi > lo) || hi - lo < 1e-300) continue;
       auto eval = [&](double t, double& s1, double& s2, double& pen) {
-        if (!ring_terms(v, best_x + d * t, s1, s2, pen)) return kInf;
+        if (!ring_terms(best_x + d * t, s1, s2, pen)) return kInf;
         if (!boundary_ok(v, best_x + d * t)) return kInf;
         return objective(s1, s2, pen, r1, r2, rpen);
       };
@@ -439,8 +486,22 @@ class Optimizer {
   OptimizeOptions o_;
   Rng rng_;
   std::vector<FlatTriangle> flat_;
-  Topology topo_;
+  const Topology& topo_;
+  struct FaceTerm {
+    enum State : unsigned char { kSkip, kFlipped, kValid } state = kSkip;
+    double num = 0, den = 0, linf = 0;
+  };
+  std::vector<FaceTerm> terms_;
+  struct RingFace {
+    FlatTriangle flat;
+    const std::array<double, 3>* g;
+    Vec2d p[3];       // corner positions, v's own unused
+    bool is_v[3];
+  };
+  std::vector<RingFace> ring_;
   double area3_ = 0, s1_ = 0, s2_ = 0, pen_ = 0, k2_ = 1, tau_ = 0;
+  // Squared Linf bounds of linf_above: -1 and +inf (always exact) unless tau_ is positive.
+  double tau_hi_ = -1, tau_lo_ = kInf;
   double marea_ = 0, k2m_ = 1;  // metric area and UV area / metric area (signal metric)
   bool valid_ = true;
   std::vector<int> bprev_, bnext_;
@@ -469,7 +530,10 @@ std::vector<Vec2d> clip_left(const std::vector<Vec2d>& poly, const Vec2d& a, con
 }  // namespace
 
 int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, int max_passes) {
-  const Topology topo(faces, static_cast<int>(uv.size()));
+  return untangle(faces, uv, Topology(faces, static_cast<int>(uv.size())), max_passes);
+}
+
+int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, const Topology& topo, int max_passes) {
   auto flipped = [&](int f) {
     const Face& t = faces[f];
     return !(signed_area(uv[t[0]], uv[t[1]], uv[t[2]]) > 0);
@@ -531,12 +595,17 @@ int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, int max_pas
 
 OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
                                 std::vector<Vec2d>& uv, const OptimizeOptions& options) {
+  return optimize_stretch(positions, faces, uv, options, Topology(faces, static_cast<int>(uv.size())));
+}
+
+OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
+                                std::vector<Vec2d>& uv, const OptimizeOptions& options, const Topology& topology) {
   OptimizeResult r;
   if (!options.face_metric.empty() && options.face_metric.size() != faces.size())
     throw Error("optimize_stretch: face_metric has " + std::to_string(options.face_metric.size()) +
                 " entries for " + std::to_string(faces.size()) + " faces");
   r.before = measure_stretch(positions, faces, uv);
-  Optimizer opt(positions, faces, uv, options);
+  Optimizer opt(positions, faces, uv, options, topology);
   if (opt.valid()) {
     const OptimizeResult run = opt.run();
     r.moves = run.moves;
@@ -551,7 +620,7 @@ OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::
     repair.vertex_l2_threshold = std::numeric_limits<double>::infinity();  // Linf violators only
     repair.give_up_l2 = 0;
     repair.seed = options.seed + 1;
-    Optimizer fix(positions, faces, uv, repair);
+    Optimizer fix(positions, faces, uv, repair, topology);
     const OptimizeResult run = fix.run();
     r.moves += run.moves;
     r.sweeps += run.sweeps;

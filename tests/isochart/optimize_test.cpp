@@ -128,3 +128,25 @@ TEST_CASE("optimization never makes the boundary cross itself", "[optimize]") {
   CHECK(r.after.l2 < r.before.l2);
   CHECK(overlapping_uv_pairs(tris()).empty());
 }
+
+TEST_CASE("a caller's topology gives the same optimization and untangling", "[optimize]") {
+  Patch a = bump_patch(16, 1.2), b = bump_patch(16, 1.2);
+  const Topology topo(b.faces, static_cast<int>(b.uv.size()));
+  // A fold for untangle: one interior vertex pushed across its neighbours.
+  a.uv[8 * 17 + 8] = b.uv[8 * 17 + 8] = {0.4, 0.05};
+  REQUIRE(untangle(a.faces, a.uv) == 0);
+  REQUIRE(untangle(b.faces, b.uv, topo) == 0);
+  OptimizeOptions o;
+  o.seed = 11;
+  o.vertex_l2_threshold = 1.05;  // the ordering filter is on, as in the atlas
+  const OptimizeResult ra = optimize_stretch(a.positions, a.faces, a.uv, o);
+  const OptimizeResult rb = optimize_stretch(b.positions, b.faces, b.uv, o, topo);
+  CHECK(ra.moves > 0);
+  CHECK(ra.moves == rb.moves);
+  CHECK(ra.sweeps == rb.sweeps);
+  for (size_t v = 0; v < a.uv.size(); ++v) {
+    INFO("vertex " << v);
+    CHECK(a.uv[v].x == b.uv[v].x);
+    CHECK(a.uv[v].y == b.uv[v].y);
+  }
+}

@@ -57,6 +57,8 @@ struct OptimizeResult {
 /// kernel"), or, when the kernel is empty, to the mean of its neighbours, for up to `max_passes`
 /// sweeps. Returns the number of flipped or degenerate triangles left.
 int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, int max_passes = 30);
+/// Same, with the caller's Topology of (faces, #V = uv.size()) instead of building one.
+int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, const Topology& topology, int max_passes = 30);
 
 /// Optimizes per-vertex texture coordinates `uv` (#V) of a chart (positions #V, faces #F, CCW in
 /// texture space) in place, reducing the normalized L2 stretch while pushing every triangle's
@@ -66,5 +68,9 @@ int untangle(const std::vector<Face>& faces, std::vector<Vec2d>& uv, int max_pas
 ///      reports the flips).
 OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
                                 std::vector<Vec2d>& uv, const OptimizeOptions& options = {});
+/// Same, with the caller's Topology of (faces, #V = uv.size()) instead of building one: a chart
+/// tried from several starts is then analysed once. The result is the same.
+OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
+                                std::vector<Vec2d>& uv, const OptimizeOptions& options, const Topology& topology);
 
 }  // namespace isochart
