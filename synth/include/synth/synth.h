@@ -41,17 +41,20 @@ struct SynthOptions {
   /// batches (≪ samples) give the same quality, and the result is the same for any thread count.
   int first_pass_batch = 256;
   int full_passes = 2;      ///< non-causal passes per level after the coarsest
-  int coarsest_passes = 2;  ///< non-causal passes on the coarsest level after its exemplar copy
+  int coarsest_passes = 2;  ///< non-causal passes on the first synthesized level after its exemplar copy
   /// Coherence bias (Hertzmann et al. 2001's κ): a kd-tree candidate must be this much better
   /// (relative distance) than the best coherent one to be chosen. 0: no preference.
   double coherence = 0.1;
   /// Size of the k-coherence sets (Tong et al. 2002): per exemplar pixel, its most similar
   /// neighbourhoods elsewhere, tried shifted like the coherent candidates. 0: coherent only.
   int k_coherence = 2;
-  /// Synthesis starts at the coarsest level with at least this many samples (zipper groups):
-  /// on coarser ones most neighbourhood taps cross seams or leave the mesh. The finest level
-  /// is always synthesized.
-  int min_level_samples = 4000;
+  /// Synthesis starts at the coarsest level with at least this many samples (zipper groups);
+  /// the finest level is always synthesized. On small levels most neighbourhood taps cross
+  /// seams or leave the mesh, and an exemplar with structure larger than the neighbourhood
+  /// (bricks) loses it there: measured on bunny + bricks at 256² (bench/README.md), starting
+  /// at 128² gave blotches where starting at 256² (the field-following copy, then passes)
+  /// kept brick rows legible.
+  int min_level_samples = 20000;
   int candidates = 8;       ///< FLANN candidates re-ranked exactly
   int pca_dims = 12;        ///< PCA dimensions of the kd-trees (more: better candidates, slower)
   int relax_iterations = 200;///< smoothing sweeps of the computed direction field
