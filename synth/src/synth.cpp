@@ -338,6 +338,11 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   // starts at the coarsest level with enough samples (the finest one at the latest).
   int top = 0;
   while (top + 1 < nl && pyramid[top + 1].image.num_groups >= o.min_level_samples) ++top;
+  for (int l = top + 1; l < nl; ++l) {
+    res.levels[l].width = pyramid[l].image.width;
+    res.levels[l].height = pyramid[l].image.height;
+    res.levels[l].texel_size = pyramid[l].stats.texel_size;
+  }
   for (int l = top; l >= 0; --l) {
     const auto tl = std::chrono::steady_clock::now();
     const mcgim::Level& lv = pyramid[l];
@@ -452,28 +457,54 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
       };
       std::vector<Vec2d> coord(static_cast<std::size_t>(g.width) * g.height, Vec2d{0, 0});
       std::vector<char> reached(coord.size(), 0);
+      // Samples of each zipper group (one surface point on several charts' borders): the copy
+      // continues through them into the neighbour chart, so that seams start continuous.
+      std::vector<int> group_start(groups + 1, 0), group_members;
+      for (int s = 0; s < g.width * g.height; ++s)
+        if (g.defined(s)) ++group_start[g.group[s] + 1];
+      for (int gi = 0; gi < groups; ++gi) group_start[gi + 1] += group_start[gi];
+      group_members.resize(group_start[groups]);
+      {
+        std::vector<int> fill(group_start.begin(), group_start.end() - 1);
+        for (int s = 0; s < g.width * g.height; ++s)
+          if (g.defined(s)) group_members[fill[g.group[s]]++] = s;
+      }
+      // Charts by decreasing size seed the copy; a chart already reached through a seam is not
+      // seeded again.
+      std::vector<int> chart_order(g.num_charts);
+      std::iota(chart_order.begin(), chart_order.end(), 0);
+      std::stable_sort(chart_order.begin(), chart_order.end(),
+                       [&](int x, int y) { return centre[x][2] > centre[y][2]; });
       std::deque<int> queue;
-      for (int ch = 0; ch < g.num_charts; ++ch) {
-        if (seed_sample[ch] < 0) continue;
+      for (int ch : chart_order) {
+        if (seed_sample[ch] < 0 || reached[seed_sample[ch]]) continue;
         isochart::Rng rng(isochart::mix_seed(o.seed, 5000u + static_cast<std::uint64_t>(ch)));
         coord[seed_sample[ch]] = {rng.uniform() * e.width, rng.uniform() * e.height};
         reached[seed_sample[ch]] = 1;
         queue.push_back(seed_sample[ch]);
-      }
-      while (!queue.empty()) {
-        const int s = queue.front();
-        queue.pop_front();
-        const int x = s % g.width, y = s / g.width;
-        const int nb[4][2] = {{x + 1, y}, {x - 1, y}, {x, y + 1}, {x, y - 1}};
-        for (const auto& q : nb) {
-          if (q[0] < 0 || q[1] < 0 || q[0] >= g.width || q[1] >= g.height) continue;
-          const int t = g.index(q[0], q[1]);
-          if (reached[t] || g.chart[t] != g.chart[s]) continue;
-          const Vec3d w = g.positions[t] - g.positions[s];
-          const Vec3d a1 = geo[l].t1(s) + geo[l].t1(t), a2 = geo[l].t2(s) + geo[l].t2(t);
-          coord[t] = {coord[s].x + isochart::dot(a1, w) / (2 * spacing), coord[s].y - isochart::dot(a2, w) / (2 * spacing)};
-          reached[t] = 1;
-          queue.push_back(t);
+        while (!queue.empty()) {
+          const int s = queue.front();
+          queue.pop_front();
+          const int grp = g.group[s];
+          for (int k = group_start[grp]; k < group_start[grp + 1]; ++k) {
+            const int t = group_members[k];
+            if (reached[t]) continue;
+            coord[t] = coord[s];
+            reached[t] = 1;
+            queue.push_back(t);
+          }
+          const int x = s % g.width, y = s / g.width;
+          const int nb[4][2] = {{x + 1, y}, {x - 1, y}, {x, y + 1}, {x, y - 1}};
+          for (const auto& q : nb) {
+            if (q[0] < 0 || q[1] < 0 || q[0] >= g.width || q[1] >= g.height) continue;
+            const int t = g.index(q[0], q[1]);
+            if (reached[t] || g.chart[t] != g.chart[s]) continue;
+            const Vec3d w = g.positions[t] - g.positions[s];
+            const Vec3d a1 = geo[l].t1(s) + geo[l].t1(t), a2 = geo[l].t2(s) + geo[l].t2(t);
+            coord[t] = {coord[s].x + isochart::dot(a1, w) / (2 * spacing), coord[s].y - isochart::dot(a2, w) / (2 * spacing)};
+            reached[t] = 1;
+            queue.push_back(t);
+          }
         }
       }
       for (int gi = 0; gi < groups; ++gi) {

@@ -322,4 +322,12 @@ TEST_CASE("synthesis copies coherent exemplar patches", "[synth]") {
   REQUIRE(r.levels[0].exemplar_width * r.levels[0].exemplar_height < 30 * 30);
   CHECK(coherent > 0.5 * pairs);
   CHECK(r.seam_error < 1.6);
+  // The 24² level has far fewer samples than min_level_samples: reported, not synthesized.
+  CHECK(r.levels[1].width == 24);
+  CHECK(r.levels[1].groups == 0);
+  CHECK(r.group_colors[1].empty());
+  so.min_level_samples = 1;
+  const synth::SynthResult all = synth::synthesize(atlas, pyramid, synth::make_exemplar("bricks", 64), so);
+  CHECK(all.levels[1].groups > 0);
+  CHECK(all.group_colors[1].size() == static_cast<std::size_t>(pyramid[1].image.num_groups));
 }

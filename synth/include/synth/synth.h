@@ -61,7 +61,8 @@ struct SynthOptions {
   std::uint64_t seed = 1;   ///< every random choice; output independent of the thread count
 };
 
-/// Per-level figures. Seconds are wall time.
+/// Per-level figures. Seconds are wall time. Levels coarser than the first synthesized one
+/// (see SynthOptions::min_level_samples) have only their size and texel size set.
 struct SynthLevelStats {
   int width = 0, height = 0;
   int exemplar_width = 0, exemplar_height = 0;  ///< exemplar pyramid level
