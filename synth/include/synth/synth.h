@@ -2,8 +2,9 @@
 /// Surface texture synthesis over an MCGIM pyramid (Iso-charts §8; Wei & Levoy 2001):
 /// neighbourhoods are gathered in each chart's 2-D image domain, rotated and scaled by a smooth
 /// tangent direction field, and cross chart seams by walking over the surface into the
-/// neighbour chart. The coarsest level starts from exemplar copies laid out by the field; each
-/// finer level starts from its coarser level's exemplar coordinates carried through the
+/// neighbour chart. The first synthesized level (the coarsest with enough samples, see
+/// SynthOptions::min_level_samples) starts from an exemplar copy grown over the surface along
+/// the field, continued across seams, then gets non-causal passes; each finer level starts from its coarser level's exemplar coordinates carried through the
 /// normal-shooting correspondence (coordinate upsampling), then gets non-causal passes in a
 /// random order over neighbourhoods of the current and the coarser level. Candidates are
 /// Ashikhmin coherent candidates with their k-coherence sets (Tong et al. 2002) plus a few from
