@@ -50,12 +50,14 @@ struct SynthOptions {
   /// neighbourhoods elsewhere, tried shifted like the coherent candidates. 0: coherent only.
   int k_coherence = 2;
   /// Synthesis starts at the coarsest level with at least this many samples (zipper groups);
-  /// the finest level is always synthesized. On small levels most neighbourhood taps cross
-  /// seams or leave the mesh, and an exemplar with structure larger than the neighbourhood
-  /// (bricks) loses it there: measured on bunny + bricks at 256² (bench/README.md), starting
-  /// at 128² gave blotches where starting at 256² (the field-following copy, then passes)
-  /// kept brick rows legible.
-  int min_level_samples = 20000;
+  /// the finest level is always synthesized. On levels of a few hundred samples most
+  /// neighbourhood taps cross seams or leave the mesh and only add noise (bunny's 32² level:
+  /// 366 samples). Measured on bunny and horse at 256² (bench/README.md): from 64² (the
+  /// default) stochastic exemplars such as cells keep round cells of even size; an exemplar
+  /// with thin structure (the bricks photograph) keeps legible rows only when synthesis starts
+  /// at the finest level (20000 here: the field-following copy, then coherent passes), where
+  /// cells come out streaked.
+  int min_level_samples = 1000;
   int candidates = 8;       ///< FLANN candidates re-ranked exactly
   int pca_dims = 12;        ///< PCA dimensions of the kd-trees (more: better candidates, slower)
   int relax_iterations = 200;///< smoothing sweeps of the computed direction field
