@@ -29,7 +29,8 @@ struct SynthArgs {
   std::vector<int> levels = {256, 128, 64, 32};
   int neighborhood = 5;
   int coarse_neighborhood = 3;
-  int full_passes = 1;
+  int full_passes = -1;     // -1: the library's default
+  int start_samples = -1;   // -1: the library's default
   int atlas_size = 1024;
 };
 
@@ -85,7 +86,8 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   if (!a.direction.empty()) so.direction = {a.direction[0], a.direction[1], a.direction[2]};
   so.neighborhood = a.neighborhood;
   so.coarse_neighborhood = a.coarse_neighborhood;
-  so.full_passes = a.full_passes;
+  if (a.full_passes >= 0) so.full_passes = a.full_passes;
+  if (a.start_samples >= 0) so.min_level_samples = a.start_samples;
   so.seed = ctx.opts.seed;
   const synth::SynthResult r = synth::synthesize(atlas, pyramid, exemplar, so, ctx.progress());
 
@@ -176,8 +178,11 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--coarse-neighborhood", args->coarse_neighborhood,
                   "Side of the coarser-level neighbourhood (odd, default 3)")
       ->check(CLI::Range(1, 15));
-  sub->add_option("--passes", args->full_passes, "Full non-causal passes per level (default 1)")
+  sub->add_option("--passes", args->full_passes, "Non-causal passes per level after the first synthesized (default 2)")
       ->check(CLI::Range(0, 10));
+  sub->add_option("--start-samples", args->start_samples,
+                  "Start at the coarsest pyramid level with at least N samples (default 1000; 20000 starts at 256² for thin-structured exemplars such as bricks)")
+      ->check(CLI::Range(1, 1 << 28));
   sub->add_option("--atlas-size", args->atlas_size, "Texture size of the atlas output (default 1024)")
       ->check(CLI::Range(16, 8192));
   sub->footer("Example:\n  isocharts synth builtin:creature -o creature.glb && "

@@ -81,8 +81,11 @@ struct Matcher {
   std::vector<int> candidate_of;    // exemplar pixel → candidate, −1 when not one
   std::vector<float> features;      // candidates × dim
   KdIndex full;                     // every component (non-causal passes)
-  KdIndex coarse;                   // coarser-level components only (first pass), if any
   double variance = 0;              // mean per-component variance of the exemplar colours
+  // k-coherence (Tong et al. 2002): per candidate, the exemplar pixels of its `similar_k` most
+  // similar other neighbourhoods (exact distance among kd-tree candidates), −1 padded.
+  int similar_k = 0;
+  std::vector<int> similar;
 };
 
 float pixel_clamped(const Image& img, double x, double y, int c) {
@@ -113,7 +116,7 @@ void exemplar_neighborhood(const Image& e, const Image* coarse, double ratio, in
       for (int c = 0; c < 3; ++c) out[k++] = pixel_clamped(*coarse, cx + a, cy - b, c);
 }
 
-Matcher build_matcher(const Image& e, const Image* coarse, double ratio, int n, int nc, int pca_dims) {
+Matcher build_matcher(const Image& e, const Image* coarse, double ratio, int n, int nc, int pca_dims, int similar_k) {
   Matcher m;
   m.width = e.width;
   m.height = e.height;
@@ -152,7 +155,31 @@ Matcher build_matcher(const Image& e, const Image* coarse, double ratio, int n, 
     kd.index->buildIndex();
   };
   build(m.full, 0, m.dim);
-  if (coarse) build(m.coarse, 3 * n * n, m.dim - 3 * n * n);
+  m.similar_k = std::min(similar_k, count - 1);
+  if (m.similar_k > 0) {
+    m.similar.assign(static_cast<std::size_t>(count) * m.similar_k, -1);
+    // Neighbours closer than this in the exemplar mostly repeat the candidate's own shift.
+    const int exclude = std::max(1, n / 2);
+    const int want = std::min(count, m.similar_k + 1 + (2 * exclude + 1) * (2 * exclude + 1));
+    tbb::parallel_for(tbb::blocked_range<int>(0, count, 256), [&](const tbb::blocked_range<int>& range) {
+      std::vector<int> idx(want);
+      std::vector<float> dist(want);
+      for (int i = range.begin(); i < range.end(); ++i) {
+        flann::Matrix<float> qm(&m.full.projected[static_cast<std::size_t>(i) * m.full.pca], 1, m.full.pca);
+        flann::Matrix<int> im(idx.data(), 1, want);
+        flann::Matrix<float> dm(dist.data(), 1, want);
+        m.full.index->knnSearch(qm, im, dm, want, flann::SearchParams(-1, 0.0f));
+        const int xi = m.centres[i] % e.width, yi = m.centres[i] / e.width;
+        int k = 0;
+        for (int j = 0; j < want && k < m.similar_k; ++j) {
+          if (idx[j] < 0) continue;
+          const int xj = m.centres[idx[j]] % e.width, yj = m.centres[idx[j]] / e.width;
+          if (std::abs(xj - xi) <= exclude && std::abs(yj - yi) <= exclude) continue;
+          m.similar[static_cast<std::size_t>(i) * m.similar_k + k++] = m.centres[idx[j]];
+        }
+      }
+    });
+  }
   double var = 0;
   for (int c = 0; c < 3; ++c) {
     double s = 0, s2 = 0;
@@ -169,44 +196,51 @@ Matcher build_matcher(const Image& e, const Image* coarse, double ratio, int n, 
 
 struct Match {
   int pixel = -1;     // exemplar pixel index
-  double error = 0;   // mean squared difference per valid component
+  double error = 0;   // mean squared difference per valid component (unbiased)
 };
 
 // `query`: dim values; `valid`: dim/3 flags per tap (a missing tap is left out).
-// `coherent`: further exemplar pixels to re-rank (Ashikhmin's coherent candidates: where the
-// already-chosen neighbours' exemplar positions say this sample should continue).
-// Candidates come from `kd` (missing components at the mean), then are re-ranked exactly.
+// `coherent`: exemplar pixels to re-rank first (Ashikhmin's coherent candidates: where the
+// already-synthesized neighbours' exemplar positions say this sample should continue, and
+// their k-coherence sets). `candidates` more come from `kd` (missing components at the mean);
+// their exact distance is multiplied by 1 + `bias` when compared, so that a patch is only left
+// for a clearly better match elsewhere (Hertzmann et al. 2001's coherence parameter).
 Match best_match(const Matcher& m, const KdIndex& kd, const float* query, const std::vector<char>& valid,
-                 int candidates, const std::vector<int>& coherent) {
+                 int candidates, double bias, const std::vector<int>& coherent) {
+  int count = 0;
+  for (int i = 0; i < m.dim; ++i) count += valid[i / 3] ? 1 : 0;
+  Match best;
+  best.error = std::numeric_limits<double>::infinity();
+  double best_score = best.error;
+  auto consider = [&](int cand, double factor) {
+    const float* f = &m.features[static_cast<std::size_t>(cand) * m.dim];
+    double d = 0;
+    for (int i = 0; i < m.dim; ++i)
+      if (valid[i / 3]) d += double(query[i] - f[i]) * (query[i] - f[i]);
+    d /= std::max(1, count);
+    const double score = d * factor;
+    const int px = m.centres[cand];
+    if (score < best_score || (score == best_score && px < best.pixel)) best = {px, d}, best_score = score;
+  };
+  for (int px : coherent)
+    if (px >= 0 && m.candidate_of[px] >= 0) consider(m.candidate_of[px], 1.0);
+  if (candidates <= 0 && best.pixel >= 0) return best;
   Eigen::VectorXf q(kd.count);
   for (int i = 0; i < kd.count; ++i) {
     const int c = kd.first + i;
     q[i] = valid[c / 3] ? query[c] - kd.mean[i] : 0.0f;
   }
   Eigen::VectorXf proj = kd.basis.transpose() * q;
-  const int k = std::min<int>(candidates, static_cast<int>(m.centres.size()));
+  const int k = std::min<int>(std::max(1, candidates), static_cast<int>(m.centres.size()));
   std::vector<int> idx(k);
   std::vector<float> dist(k);
   flann::Matrix<float> qm(proj.data(), 1, kd.pca);
   flann::Matrix<int> im(idx.data(), 1, k);
   flann::Matrix<float> dm(dist.data(), 1, k);
   kd.index->knnSearch(qm, im, dm, k, flann::SearchParams(-1, 1.0f));
-  Match best;
-  best.error = std::numeric_limits<double>::infinity();
-  int count = 0;
-  for (int i = 0; i < m.dim; ++i) count += valid[i / 3] ? 1 : 0;
-  for (int px : coherent)
-    if (px >= 0 && m.candidate_of[px] >= 0) idx.push_back(m.candidate_of[px]);
-  for (std::size_t j = 0; j < idx.size(); ++j) {
-    if (idx[j] < 0) continue;
-    const float* f = &m.features[static_cast<std::size_t>(idx[j]) * m.dim];
-    double d = 0;
-    for (int i = 0; i < m.dim; ++i)
-      if (valid[i / 3]) d += double(query[i] - f[i]) * (query[i] - f[i]);
-    d /= std::max(1, count);
-    const int px = m.centres[idx[j]];
-    if (d < best.error || (d == best.error && px < best.pixel)) best = {px, d};
-  }
+  const double factor = coherent.empty() ? 1.0 : 1.0 + bias;
+  for (int j : idx)
+    if (j >= 0) consider(j, factor);
   return best;
 }
 
@@ -249,8 +283,11 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     throw isochart::InputError("", "neighborhood must be odd and at least 3");
   if (o.coarse_neighborhood < 1 || o.coarse_neighborhood % 2 == 0)
     throw isochart::InputError("", "coarse neighborhood must be odd and at least 1");
-  if (o.first_pass_batch < 1 || o.full_passes < 0 || o.coarsest_passes < 0 || o.candidates < 1 || o.pca_dims < 1)
+  if (o.first_pass_batch < 1 || o.full_passes < 0 || o.coarsest_passes < 0 || o.candidates < 1 || o.pca_dims < 1 ||
+      o.k_coherence < 0)
     throw isochart::InputError("", "synthesis passes, batches, candidates and PCA dimensions must be positive");
+  if (!(o.coherence >= 0) || !std::isfinite(o.coherence))
+    throw isochart::InputError("", "coherence bias must be a non-negative number");
   if (!(o.scale >= 0) || !std::isfinite(o.scale)) throw isochart::InputError("", "scale must be positive");
   if (exemplar.channels != 3 || exemplar.width < 4 || exemplar.height < 4)
     throw isochart::InputError("", "the exemplar must be RGB and at least 4x4 (see load_exemplar)");
@@ -272,6 +309,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
 
   std::vector<LevelGeometry> geo;
   std::vector<std::vector<int>> reps(nl);  // a sample per zipper group
+  std::vector<std::vector<int>> sources(nl);  // per level and group: its exemplar pixel or −1
   geo.reserve(nl);
   for (int l = 0; l < nl; ++l) {
     const mcgim::GeometryImage& g = pyramid[l].image;
@@ -296,11 +334,20 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   const int n = o.neighborhood, nc = o.coarse_neighborhood;
   res.group_colors.resize(nl);
   res.levels.resize(nl);
-  for (int l = nl - 1; l >= 0; --l) {
+  // Levels too small for a neighbourhood to fit in their charts only add noise: synthesis
+  // starts at the coarsest level with enough samples (the finest one at the latest).
+  int top = 0;
+  while (top + 1 < nl && pyramid[top + 1].image.num_groups >= o.min_level_samples) ++top;
+  for (int l = top + 1; l < nl; ++l) {
+    res.levels[l].width = pyramid[l].image.width;
+    res.levels[l].height = pyramid[l].image.height;
+    res.levels[l].texel_size = pyramid[l].stats.texel_size;
+  }
+  for (int l = top; l >= 0; --l) {
     const auto tl = std::chrono::steady_clock::now();
     const mcgim::Level& lv = pyramid[l];
     const mcgim::GeometryImage& g = lv.image;
-    const bool has_coarse = l + 1 < nl;
+    const bool has_coarse = l < top;
     const int groups = g.num_groups;
     const Image& e = ex[l].image;
     const double spacing = ex[l].actual_factor / res.scale;
@@ -350,25 +397,56 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
 
     const Image* coarse_img = has_coarse ? &ex[l + 1].image : nullptr;
     const double ratio = has_coarse ? ex[l].actual_factor / ex[l + 1].actual_factor : 1;
-    const Matcher matcher = build_matcher(e, coarse_img, ratio, n, has_coarse ? nc : 0, o.pca_dims);
+    const Matcher matcher = build_matcher(e, coarse_img, ratio, n, has_coarse ? nc : 0, o.pca_dims, o.k_coherence);
+
+    // Per fine tap, the group that dominates it and its offset from the sample in exemplar
+    // pixels, measured on the surface (the tap's nominal offset is off by up to a texel).
+    std::vector<std::array<int, 3>> shift(static_cast<std::size_t>(groups) * lt.fine, {-1, 0, 0});
+    tbb::parallel_for(0, groups, [&](int gi) {
+      const int s = reps[l][gi];
+      if (s < 0) return;
+      const Tap* t = &lt.taps[static_cast<std::size_t>(gi) * per];
+      for (int k = 0; k < lt.fine; ++k) {
+        if (!t[k].valid()) continue;
+        int j = 0;
+        for (int i = 1; i < 4 && t[k].sample[i] >= 0; ++i)
+          if (t[k].weight[i] > t[k].weight[j]) j = i;
+        const Vec3d w = g.positions[t[k].sample[j]] - g.positions[s];
+        shift[static_cast<std::size_t>(gi) * lt.fine + k] = {
+            g.group[t[k].sample[j]], static_cast<int>(std::lround(isochart::dot(geo[l].t1(s), w) / spacing)),
+            static_cast<int>(std::lround(isochart::dot(geo[l].t2(s), w) / spacing))};
+      }
+    });
 
     std::vector<Color>& col = res.group_colors[l];
     col.assign(groups, Color{0.5f, 0.5f, 0.5f});
-    std::vector<int> src(groups, -1);  // exemplar pixel each group was copied from
+    std::vector<int>& src = sources[l];  // exemplar pixel each group was copied from
+    src.assign(groups, -1);
     auto set_pixel = [&](std::vector<Color>& cs, std::vector<int>& ss, int gi, int px) {
       for (int c = 0; c < 3; ++c) cs[gi][c] = e.pixels[px * 3 + c];
       ss[gi] = px;
     };
     if (!has_coarse) {
-      // Coarsest level: each chart starts as a copy of the exemplar at a random offset, laid
-      // out by the direction field (per-sample noise would make the first non-causal passes
-      // regress to the exemplar's mean colour).
+      // Coarsest level: each chart starts as a copy of the exemplar at a random offset, grown
+      // outwards from the chart's central sample: every sample continues the exemplar position
+      // of the sample it was reached from, shifted by their surface offset in its own frame, so
+      // that the copy follows the direction field locally (per-sample noise would make the
+      // non-causal passes regress to the exemplar's mean colour).
       std::vector<std::array<double, 3>> centre(g.num_charts, {0, 0, 0});
       for (int gi = 0; gi < groups; ++gi) {
         const int s = reps[l][gi];
         if (s < 0) continue;
         auto& c = centre[g.chart[s]];
         c[0] += s % g.width + 0.5, c[1] += s / g.width + 0.5, c[2] += 1;
+      }
+      std::vector<int> seed_sample(g.num_charts, -1);
+      std::vector<double> seed_d(g.num_charts, std::numeric_limits<double>::infinity());
+      for (int s = 0; s < g.width * g.height; ++s) {
+        if (!g.defined(s)) continue;
+        const int ch = g.chart[s];
+        const double ddx = s % g.width + 0.5 - centre[ch][0] / centre[ch][2];
+        const double ddy = s / g.width + 0.5 - centre[ch][1] / centre[ch][2];
+        if (ddx * ddx + ddy * ddy < seed_d[ch]) seed_d[ch] = ddx * ddx + ddy * ddy, seed_sample[ch] = s;
       }
       auto reflect = [](double v, int size) {
         const double period = 2.0 * size;
@@ -377,107 +455,153 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
         if (v >= size) v = period - v - 1e-9;
         return std::clamp(static_cast<int>(v), 0, size - 1);
       };
+      std::vector<Vec2d> coord(static_cast<std::size_t>(g.width) * g.height, Vec2d{0, 0});
+      std::vector<char> reached(coord.size(), 0);
+      // Samples of each zipper group (one surface point on several charts' borders): the copy
+      // continues through them into the neighbour chart, so that seams start continuous.
+      std::vector<int> group_start(groups + 1, 0), group_members;
+      for (int s = 0; s < g.width * g.height; ++s)
+        if (g.defined(s)) ++group_start[g.group[s] + 1];
+      for (int gi = 0; gi < groups; ++gi) group_start[gi + 1] += group_start[gi];
+      group_members.resize(group_start[groups]);
+      {
+        std::vector<int> fill(group_start.begin(), group_start.end() - 1);
+        for (int s = 0; s < g.width * g.height; ++s)
+          if (g.defined(s)) group_members[fill[g.group[s]]++] = s;
+      }
+      // Charts by decreasing size seed the copy; a chart already reached through a seam is not
+      // seeded again.
+      std::vector<int> chart_order(g.num_charts);
+      std::iota(chart_order.begin(), chart_order.end(), 0);
+      std::stable_sort(chart_order.begin(), chart_order.end(),
+                       [&](int x, int y) { return centre[x][2] > centre[y][2]; });
+      std::deque<int> queue;
+      for (int ch : chart_order) {
+        if (seed_sample[ch] < 0 || reached[seed_sample[ch]]) continue;
+        isochart::Rng rng(isochart::mix_seed(o.seed, 5000u + static_cast<std::uint64_t>(ch)));
+        coord[seed_sample[ch]] = {rng.uniform() * e.width, rng.uniform() * e.height};
+        reached[seed_sample[ch]] = 1;
+        queue.push_back(seed_sample[ch]);
+        while (!queue.empty()) {
+          const int s = queue.front();
+          queue.pop_front();
+          const int grp = g.group[s];
+          for (int k = group_start[grp]; k < group_start[grp + 1]; ++k) {
+            const int t = group_members[k];
+            if (reached[t]) continue;
+            coord[t] = coord[s];
+            reached[t] = 1;
+            queue.push_back(t);
+          }
+          const int x = s % g.width, y = s / g.width;
+          const int nb[4][2] = {{x + 1, y}, {x - 1, y}, {x, y + 1}, {x, y - 1}};
+          for (const auto& q : nb) {
+            if (q[0] < 0 || q[1] < 0 || q[0] >= g.width || q[1] >= g.height) continue;
+            const int t = g.index(q[0], q[1]);
+            if (reached[t] || g.chart[t] != g.chart[s]) continue;
+            const Vec3d w = g.positions[t] - g.positions[s];
+            const Vec3d a1 = geo[l].t1(s) + geo[l].t1(t), a2 = geo[l].t2(s) + geo[l].t2(t);
+            coord[t] = {coord[s].x + isochart::dot(a1, w) / (2 * spacing), coord[s].y - isochart::dot(a2, w) / (2 * spacing)};
+            reached[t] = 1;
+            queue.push_back(t);
+          }
+        }
+      }
       for (int gi = 0; gi < groups; ++gi) {
         const int s = reps[l][gi];
-        if (s < 0) continue;
-        const int ch = g.chart[s];
-        isochart::Rng rng(isochart::mix_seed(o.seed, 5000u + static_cast<std::uint64_t>(ch)));
-        const double ox = rng.uniform() * e.width, oy = rng.uniform() * e.height;
-        const auto& c = centre[ch];
-        const double ddx = s % g.width + 0.5 - c[0] / c[2], ddy = s / g.width + 0.5 - c[1] / c[2];
-        const Vec3d w = geo[l].dpdx(s) * ddx + geo[l].dpdy(s) * ddy;
-        const int px = reflect(ox + isochart::dot(geo[l].t1(s), w) / spacing, e.width);
-        const int py = reflect(oy - isochart::dot(geo[l].t2(s), w) / spacing, e.height);
-        set_pixel(col, src, gi, py * e.width + px);
+        if (s < 0 || !reached[s]) continue;
+        set_pixel(col, src, gi, reflect(coord[s].y, e.height) * e.width + reflect(coord[s].x, e.width));
       }
     } else {
-      // Upsampled from the coarser level through the correspondence.
+      // Coordinate upsampling (Lefebvre & Hoppe 2005): each sample continues the exemplar
+      // patch of the coarser sample nearest to its normal-shooting landing point, shifted by
+      // its surface offset from that sample in the local frame; the coarser level's structure
+      // thus carries over whole instead of as blurred colours. Samples without a landing
+      // point take the interpolated coarser colour and no exemplar position.
       const std::vector<Color>& cc = res.group_colors[l + 1];
+      const std::vector<int>& csrc = sources[l + 1];
       const mcgim::GeometryImage& cg = pyramid[l + 1].image;
+      const Image& ce = ex[l + 1].image;
+      const double up = ex[l + 1].actual_factor / ex[l].actual_factor;
       for (int gi = 0; gi < groups; ++gi) {
         const int s = reps[l][gi];
         if (s < 0) continue;
         const mcgim::Correspondence& cr = lv.coarser[s];
         if (cr.face < 0) continue;
         const auto& corners = pyramid[l + 1].remesh.face_samples[cr.face];
-        Color v{0, 0, 0};
-        for (int k = 0; k < 3; ++k)
-          for (int c = 0; c < 3; ++c) v[c] += static_cast<float>(cr.barycentric[k]) * cc[cg.group[corners[k]]][c];
-        col[gi] = v;
+        int best = 0;
+        for (int c = 1; c < 3; ++c)
+          if (cr.barycentric[c] > cr.barycentric[best]) best = c;
+        const int cs = corners[best];
+        const int pc = csrc[cg.group[cs]];
+        if (pc < 0) {
+          Color v{0, 0, 0};
+          for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < 3; ++c) v[c] += static_cast<float>(cr.barycentric[k]) * cc[cg.group[corners[k]]][c];
+          col[gi] = v;
+          continue;
+        }
+        const Vec3d w = g.positions[s] - cg.positions[cs];
+        const double fx = (pc % ce.width + 0.5) * up - 0.5 + isochart::dot(geo[l + 1].t1(cs), w) / spacing;
+        const double fy = (pc / ce.width + 0.5) * up - 0.5 - isochart::dot(geo[l + 1].t2(cs), w) / spacing;
+        const int px = std::clamp(static_cast<int>(std::lround(fx)), 0, e.width - 1);
+        const int py = std::clamp(static_cast<int>(std::lround(fy)), 0, e.height - 1);
+        set_pixel(col, src, gi, py * e.width + px);
       }
     }
     const std::vector<Color>* coarse_col = has_coarse ? &res.group_colors[l + 1] : nullptr;
     const mcgim::GeometryImage* cgi = has_coarse ? &pyramid[l + 1].image : nullptr;
 
-    auto gather = [&](int gi, const std::vector<Color>& cur, const std::vector<char>* done, float* q,
-                      std::vector<char>& valid) {
+    auto gather = [&](int gi, float* q, std::vector<char>& valid) {
       const Tap* t = &lt.taps[static_cast<std::size_t>(gi) * per];
       for (int k = 0; k < per; ++k) {
         const bool fine = k < lt.fine;
         const mcgim::GeometryImage& gg = fine ? g : *cgi;
-        const std::vector<Color>& cs = fine ? cur : *coarse_col;
-        bool ok = t[k].valid();
+        const std::vector<Color>& cs = fine ? col : *coarse_col;
+        const bool ok = t[k].valid();
         float v[3] = {0, 0, 0};
         for (int j = 0; ok && j < 4 && t[k].sample[j] >= 0; ++j) {
           const int grp = gg.group[t[k].sample[j]];
-          if (fine && done && !(*done)[grp]) ok = false;
           for (int c = 0; c < 3; ++c) v[c] += t[k].weight[j] * cs[grp][c];
         }
         valid[k] = ok ? 1 : 0;
-        for (int c = 0; c < 3; ++c) q[k * 3 + c] = ok ? v[c] : 0.0f;
+        for (int c = 0; c < 3; ++c) q[k * 3 + c] = v[c];
       }
     };
-    // Coherent candidates: the exemplar pixel that continues each synthesized neighbour.
-    const int r = n / 2;
-    auto coherent = [&](int gi, const std::vector<int>& ss, const std::vector<char>* done, std::vector<int>& out) {
+    // Candidates: the exemplar pixel that continues each neighbour's patch at this sample, and
+    // the same shift applied to the neighbour's k-coherence set (Tong et al. 2002).
+    auto coherent = [&](int gi, std::vector<int>& out) {
       out.clear();
-      const Tap* t = &lt.taps[static_cast<std::size_t>(gi) * per];
+      const std::array<int, 3>* sh = &shift[static_cast<std::size_t>(gi) * lt.fine];
       for (int k = 0; k < lt.fine; ++k) {
-        if (!t[k].valid()) continue;
-        int j = 0;
-        for (int i = 1; i < 4 && t[k].sample[i] >= 0; ++i)
-          if (t[k].weight[i] > t[k].weight[j]) j = i;
-        const int grp = g.group[t[k].sample[j]];
-        if ((done && !(*done)[grp]) || ss[grp] < 0) continue;
-        const int a = k % n - r, b = k / n - r;
-        const int x = ss[grp] % e.width - a, y = ss[grp] / e.width + b;
-        if (x < 0 || y < 0 || x >= e.width || y >= e.height) continue;
-        out.push_back(y * e.width + x);
+        if (sh[k][0] < 0) continue;
+        const int from = src[sh[k][0]];
+        if (from < 0) continue;
+        auto add = [&](int px) {
+          const int x = px % e.width - sh[k][1], y = px / e.width + sh[k][2];
+          if (x >= 0 && y >= 0 && x < e.width && y < e.height) out.push_back(y * e.width + x);
+        };
+        add(from);
+        const int cand = matcher.candidate_of[from];
+        if (cand < 0) continue;
+        for (int j = 0; j < matcher.similar_k; ++j) {
+          const int px = matcher.similar[static_cast<std::size_t>(cand) * matcher.similar_k + j];
+          if (px >= 0) add(px);
+        }
       }
+      std::sort(out.begin(), out.end());
+      out.erase(std::unique(out.begin(), out.end()), out.end());
     };
-    auto run_pass = [&](const std::vector<int>& which, const std::vector<char>* done, std::vector<Color>& out,
-                        std::vector<int>& out_src, std::vector<double>* errors) {
-      tbb::parallel_for(tbb::blocked_range<int>(0, static_cast<int>(which.size()), 64),
-                        [&](const tbb::blocked_range<int>& range) {
-                          std::vector<float> q(matcher.dim);
-                          std::vector<char> valid(per);
-                          std::vector<int> coh;
-                          for (int i = range.begin(); i < range.end(); ++i) {
-                            const int gi = which[i];
-                            if (reps[l][gi] < 0) continue;
-                            gather(gi, col, done, q.data(), valid);
-                            if (std::none_of(valid.begin(), valid.end(), [](char c) { return c != 0; })) continue;
-                            coherent(gi, src, done, coh);
-                            const Match mt = best_match(matcher, matcher.full, q.data(), valid, o.candidates, coh);
-                            if (mt.pixel < 0) continue;
-                            set_pixel(out, out_src, gi, mt.pixel);
-                            if (errors) (*errors)[gi] = mt.error;
-                          }
-                        });
-    };
-    std::vector<int> all(groups);
-    std::iota(all.begin(), all.end(), 0);
-    if (has_coarse) {
-      // First pass: coarser level plus what earlier samples synthesized, in a random order.
-      std::vector<int> order = all;
-      isochart::Rng rng(isochart::mix_seed(o.seed, 1000u + static_cast<std::uint64_t>(l)));
+    // One pass over every sample in a random order: batches of consecutive samples are matched
+    // in parallel, each seeing the results of the batches before it, so the result does not
+    // depend on the thread count and is close to a sequential (Gauss–Seidel) pass.
+    const int batch = std::max(1, o.first_pass_batch);
+    auto pass = [&](std::uint64_t salt, std::vector<double>* errors) {
+      std::vector<int> order(groups);
+      std::iota(order.begin(), order.end(), 0);
+      isochart::Rng rng(isochart::mix_seed(o.seed, salt));
       for (int i = groups - 1; i > 0; --i) std::swap(order[i], order[rng.below(static_cast<std::uint64_t>(i) + 1)]);
-      std::vector<char> done(groups, 0);
-      // Batches of consecutive samples in that order are matched in parallel, each seeing the
-      // batches before it: with a batch far smaller than the level, almost no two samples of
-      // one batch are neighbours, so this is Wei–Levoy's sequential order in effect.
-      const int batch = std::max(1, o.first_pass_batch);
-      std::vector<int> picked(batch);
+      std::vector<Match> picked(batch);
       for (int start = 0; start < groups; start += batch) {
         const int count = std::min(batch, groups - start);
         tbb::parallel_for(tbb::blocked_range<int>(0, count, 8), [&](const tbb::blocked_range<int>& range) {
@@ -486,38 +610,32 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
           std::vector<int> coh;
           for (int i = range.begin(); i < range.end(); ++i) {
             const int gi = order[start + i];
-            picked[i] = -1;
+            picked[i] = Match{};
             if (reps[l][gi] < 0) continue;
-            gather(gi, col, &done, q.data(), valid);
+            gather(gi, q.data(), valid);
             if (std::none_of(valid.begin(), valid.end(), [](char c) { return c != 0; })) continue;
-            coherent(gi, src, &done, coh);
-            picked[i] = best_match(matcher, matcher.coarse, q.data(), valid, o.candidates, coh).pixel;
+            coherent(gi, coh);
+            picked[i] = best_match(matcher, matcher.full, q.data(), valid, o.candidates, o.coherence, coh);
           }
         });
         for (int i = 0; i < count; ++i) {
           const int gi = order[start + i];
-          if (picked[i] >= 0) set_pixel(col, src, gi, picked[i]);
-          done[gi] = 1;
+          if (picked[i].pixel < 0) continue;
+          if (errors) (*errors)[gi] = picked[i].error;
+          else set_pixel(col, src, gi, picked[i].pixel);
         }
-        if ((start / batch) % 64 == 0)
-          isochart::report(progress, isochart::Stage::Synthesis,
-                           0.05 + 0.9 * ((nl - 1 - l) + 0.5 * start / double(groups)) / nl);
       }
-    }
+    };
     const int passes = has_coarse ? o.full_passes : o.coarsest_passes;
     for (int p = 0; p < passes; ++p) {
-      std::vector<Color> next = col;
-      std::vector<int> next_src = src;
-      run_pass(all, nullptr, next, next_src, nullptr);
-      col.swap(next);
-      src.swap(next_src);
+      pass(1000u + 64u * static_cast<std::uint64_t>(l) + static_cast<std::uint64_t>(p), nullptr);
+      isochart::report(progress, isochart::Stage::Synthesis,
+                       0.05 + 0.9 * ((nl - 1 - l) + (p + 1.0) / (passes + 1.0)) / nl);
     }
     if (l == 0) {
-      // Quality: the final neighbourhoods against their best matches.
-      std::vector<Color> scratch = col;
-      std::vector<int> scratch_src = src;
+      // Quality: the final neighbourhoods against their best matches (colours unchanged).
       std::vector<double> errors(groups, 0.0);
-      run_pass(all, nullptr, scratch, scratch_src, &errors);
+      pass(999u, &errors);
       double sum = 0;
       long long count = 0;
       for (int gi = 0; gi < groups; ++gi)
@@ -529,6 +647,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     isochart::report(progress, isochart::Stage::Synthesis, 0.05 + 0.9 * (nl - l) / double(nl));
   }
 
+  res.exemplar_pixels = sources[0];
   // Seam error and texel-scale spread on the finest level.
   {
     const mcgim::GeometryImage& g = pyramid[0].image;

@@ -2,11 +2,13 @@
 /// Surface texture synthesis over an MCGIM pyramid (Iso-charts §8; Wei & Levoy 2001):
 /// neighbourhoods are gathered in each chart's 2-D image domain, rotated and scaled by a smooth
 /// tangent direction field, and cross chart seams by walking over the surface into the
-/// neighbour chart. The coarsest level starts from exemplar copies laid out by the field; each
-/// finer level is upsampled from the next coarser one through the normal-shooting
-/// correspondence, then gets a first pass in random order (coarser level plus the samples
-/// already synthesized) and full non-causal passes. Candidates come from FLANN kd-trees on
-/// PCA-reduced neighbourhoods plus Ashikhmin-style coherent candidates, re-ranked exactly.
+/// neighbour chart. The first synthesized level (the coarsest with enough samples, see
+/// SynthOptions::min_level_samples) starts from an exemplar copy grown over the surface along
+/// the field, continued across seams, then gets non-causal passes; each finer level starts from its coarser level's exemplar coordinates carried through the
+/// normal-shooting correspondence (coordinate upsampling), then gets non-causal passes in a
+/// random order over neighbourhoods of the current and the coarser level. Candidates are
+/// Ashikhmin coherent candidates with their k-coherence sets (Tong et al. 2002) plus a few from
+/// FLANN kd-trees on PCA-reduced neighbourhoods, re-ranked exactly with a coherence bias.
 
 #include <array>
 #include <cstdint>
@@ -33,20 +35,37 @@ struct SynthOptions {
   isochart::Vec3d direction{0, 0, 0};
   int neighborhood = 5;         ///< odd side of the current-level square neighbourhood (≥ 3)
   int coarse_neighborhood = 3;  ///< odd side of the coarser-level square (≥ 1)
-  /// The first pass at each level visits the samples in a random order, each seeing the
-  /// coarser level and the samples visited before it (Wei–Levoy 2001). Samples are matched
-  /// in batches of this many consecutive ones, in parallel, a batch seeing the batches before
-  /// it: 1 is the published sequential order; small batches (≪ samples) give the same quality.
-  int first_pass_batch = 64;
-  int full_passes = 1;      ///< full non-causal passes after the first pass, per level
-  int coarsest_passes = 1;  ///< full passes on the coarsest level after its first pass
+  /// Every level after the coarsest starts from coordinate upsampling (each sample continues
+  /// the exemplar patch of its coarser sample), then gets `full_passes` non-causal passes over
+  /// all samples in a random order. Samples are matched in batches of this many consecutive
+  /// ones, in parallel, a batch seeing the batches before it: 1 is a sequential pass; small
+  /// batches (≪ samples) give the same quality, and the result is the same for any thread count.
+  int first_pass_batch = 256;
+  int full_passes = 2;      ///< non-causal passes per level after the coarsest
+  int coarsest_passes = 2;  ///< non-causal passes on the first synthesized level after its exemplar copy
+  /// Coherence bias (Hertzmann et al. 2001's κ): a kd-tree candidate must be this much better
+  /// (relative distance) than the best coherent one to be chosen. 0: no preference.
+  double coherence = 0.1;
+  /// Size of the k-coherence sets (Tong et al. 2002): per exemplar pixel, its most similar
+  /// neighbourhoods elsewhere, tried shifted like the coherent candidates. 0: coherent only.
+  int k_coherence = 2;
+  /// Synthesis starts at the coarsest level with at least this many samples (zipper groups);
+  /// the finest level is always synthesized. On levels of a few hundred samples most
+  /// neighbourhood taps cross seams or leave the mesh and only add noise (bunny's 32² level:
+  /// 366 samples). Measured on bunny and horse at 256² (bench/README.md): from 64² (the
+  /// default) stochastic exemplars such as cells keep round cells of even size; an exemplar
+  /// with thin structure (the bricks photograph) keeps legible rows only when synthesis starts
+  /// at the finest level (20000 here: the field-following copy, then coherent passes), where
+  /// cells come out streaked.
+  int min_level_samples = 1000;
   int candidates = 8;       ///< FLANN candidates re-ranked exactly
   int pca_dims = 12;        ///< PCA dimensions of the kd-trees (more: better candidates, slower)
   int relax_iterations = 200;///< smoothing sweeps of the computed direction field
   std::uint64_t seed = 1;   ///< every random choice; output independent of the thread count
 };
 
-/// Per-level figures. Seconds are wall time.
+/// Per-level figures. Seconds are wall time. Levels coarser than the first synthesized one
+/// (see SynthOptions::min_level_samples) have only their size and texel size set.
 struct SynthLevelStats {
   int width = 0, height = 0;
   int exemplar_width = 0, exemplar_height = 0;  ///< exemplar pyramid level
@@ -65,6 +84,9 @@ struct SynthResult {
   /// Per level (finest first): colour of every zipper group, RGB in [0, 1].
   std::vector<std::vector<std::array<float, 3>>> group_colors;
   std::vector<SynthLevelStats> levels;
+  /// Per finest-level zipper group: the pixel (y·w + x, w = levels[0].exemplar_width) of the
+  /// finest exemplar level its colour was copied from, −1 when none (a sample without data).
+  std::vector<int> exemplar_pixels;
   double scale = 0;  ///< exemplar pixels per unit of surface length actually used
   /// Mean over finest-level samples of the squared distance between the final neighbourhood
   /// and its best exemplar match, per valid component, divided by the exemplar's variance
