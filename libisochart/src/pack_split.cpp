@@ -39,6 +39,8 @@ constexpr int kQuantiles = 9;
 constexpr double kMinPieceFraction = 0.05;
 // Candidate cuts validated (disk, stretch) per piece, best proxy gain first.
 constexpr int kCandidates = 4;
+// split_and_pack_atlas also packs the cuts whose gain exceeds this many times min_gain.
+constexpr double kCoarseGain = 4;
 
 struct ChartData {
   AtlasChart chart;
@@ -403,22 +405,43 @@ PackSplitResult split_charts_for_packing(const Mesh& mesh, Atlas& atlas, const P
 PackResult split_and_pack_atlas(const Mesh& mesh, Atlas& atlas, const PackOptions& pack,
                                 const PackSplitOptions& options, const Progress& progress, PackSplitResult* split) {
   const auto t0 = std::chrono::steady_clock::now();
-  Atlas cut = atlas;
-  PackSplitResult sr = split_charts_for_packing(mesh, cut, options);
-  PackResult result;
-  if (sr.added == 0) {
-    result = pack_atlas(mesh, atlas, pack, progress);
-  } else {
-    PackResult r_cut = pack_atlas(mesh, cut, pack, progress);
-    PackResult r_whole = pack_atlas(mesh, atlas, pack, progress);
-    if (r_cut.packing_ratio > r_whole.packing_ratio) {
-      atlas = std::move(cut);
-      result = std::move(r_cut);
-    } else {
-      sr.added = 0;
-      result = std::move(r_whole);
+  // Two cut levels, the coarse one a prefix of the fine one (the same greedy sequence,
+  // stopped at a higher gain): which packs best is not predictable, so both are packed.
+  const int nc = atlas.num_charts();
+  const int budget = options.max_added >= 0 ? options.max_added
+                                            : std::min(nc, std::max(0, options.target_charts - nc));
+  PackSplitOptions coarse = options;
+  coarse.max_added = budget;
+  coarse.min_gain = options.min_gain * kCoarseGain;
+  Atlas cut1 = atlas;
+  PackSplitResult s1 = split_charts_for_packing(mesh, cut1, coarse);
+  PackSplitOptions fine = options;
+  fine.max_added = budget - s1.added;
+  Atlas cut2 = cut1;
+  const PackSplitResult s2 = split_charts_for_packing(mesh, cut2, fine);
+  PackSplitResult sr = s1;
+  sr.added = s1.added + s2.added;
+  sr.rect_fill_after = s2.added > 0 ? s2.rect_fill_after : s1.rect_fill_after;
+
+  PackResult result = pack_atlas(mesh, atlas, pack, progress);
+  int kept = 0;
+  if (s1.added > 0) {
+    PackResult r = pack_atlas(mesh, cut1, pack, progress);
+    if (r.packing_ratio > result.packing_ratio) {
+      atlas = cut1;
+      result = std::move(r);
+      kept = s1.added;
     }
   }
+  if (s2.added > 0) {
+    PackResult r = pack_atlas(mesh, cut2, pack, progress);
+    if (r.packing_ratio > result.packing_ratio) {
+      atlas = std::move(cut2);
+      result = std::move(r);
+      kept = s1.added + s2.added;
+    }
+  }
+  sr.added = kept;
   sr.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   result.seconds = sr.seconds;
   if (split) *split = sr;
