@@ -274,7 +274,8 @@ PackSplitResult split_charts_for_packing(const Mesh& mesh, Atlas& atlas, const P
   const auto t0 = std::chrono::steady_clock::now();
   PackSplitResult result;
   const int nc = atlas.num_charts();
-  if (nc == 0) return result;
+  const int budget = options.max_added >= 0 ? options.max_added : std::min(nc, std::max(0, options.target_charts - nc));
+  if (nc == 0 || budget == 0) return result;
   std::vector<ChartData> data(nc);
   {
     std::vector<AtlasChart> split = split_atlas_charts(mesh, atlas);
@@ -330,7 +331,6 @@ PackSplitResult split_charts_for_packing(const Mesh& mesh, Atlas& atlas, const P
   };
   result.rect_fill_before = rect_fill();
 
-  const int budget = options.max_added >= 0 ? options.max_added : std::min(nc, std::max(0, options.target_charts - nc));
   while (result.added < budget) {
     evaluate_pending();
     int pick = -1;
@@ -413,6 +413,11 @@ PackResult split_and_pack_atlas(const Mesh& mesh, Atlas& atlas, const PackOption
   PackSplitOptions coarse = options;
   coarse.max_added = budget;
   coarse.min_gain = options.min_gain * kCoarseGain;
+  if (budget == 0) {
+    PackResult r = pack_atlas(mesh, atlas, pack, progress);
+    if (split) *split = PackSplitResult{0, r.seconds, 0, 0};
+    return r;
+  }
   Atlas cut1 = atlas;
   PackSplitResult s1 = split_charts_for_packing(mesh, cut1, coarse);
   PackSplitOptions fine = options;
