@@ -231,7 +231,8 @@ int main(int argc, char** argv) {
         std::printf("%-16s %6d %6d %8.3f %8.3f %8.4f %6.3f %8d %8lld %8.2f %8.2f  rect fill %.3f -> %.3f\n",
                     name.c_str(), atlas.num_charts(), atlas.num_charts() - before, input,
                     atlas.stats.packing_ratio, atlas.stats.l2, atlas.stats.linf, atlas.stats.flipped,
-                    atlas.stats.overlapping_pairs, sr.seconds, r.seconds, sr.rect_fill_before, sr.rect_fill_after);
+                    atlas.stats.overlapping_pairs, sr.seconds, r.seconds, sr.rect_fill_before,
+                    sr.rect_fill_after);
         std::fflush(stdout);
         if (!dump.empty()) {
           int count = 0;

@@ -8,8 +8,6 @@
 // is the area of the minimal bounding rectangles, which is what the packer's box grows by
 // when it cannot interlock charts.
 
-#include "isochart/pack.h"
-
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -21,6 +19,7 @@
 #include "atlas_charts.h"
 #include "isochart/atlas.h"
 #include "isochart/baselines.h"
+#include "isochart/pack.h"
 #include "isochart/stretch.h"
 
 namespace isochart {
@@ -214,7 +213,8 @@ void evaluate(const ChartData& d, Piece& p, const PackSplitOptions& o, Scratch& 
       proj[i] = c.x * n.x + c.y * n.y;
     }
     std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&](int x, int y) { return proj[x] < proj[y] || (proj[x] == proj[y] && x < y); });
+    std::sort(order.begin(), order.end(),
+              [&](int x, int y) { return proj[x] < proj[y] || (proj[x] == proj[y] && x < y); });
     int pos = 0;
     double cum = 0;
     for (int q = 1; q <= kQuantiles; ++q) {
@@ -254,8 +254,8 @@ void evaluate(const ChartData& d, Piece& p, const PackSplitOptions& o, Scratch& 
   for (Cut& c : best) {
     if (!disk(d, c.a) || !disk(d, c.b)) continue;
     const StretchStats sa = piece_stretch(d, c.a), sb = piece_stretch(d, c.b);
-    if (sa.flipped || sb.flipped || !(sa.l2 <= o.max_l2) || !(sb.l2 <= o.max_l2) || !(sa.linf <= o.max_linf) ||
-        !(sb.linf <= o.max_linf))
+    if (sa.flipped || sb.flipped || !(sa.l2 <= o.max_l2) || !(sb.l2 <= o.max_l2) ||
+        !(sa.linf <= o.max_linf) || !(sb.linf <= o.max_linf))
       continue;
     p.gain = c.gain;
     p.part_a = std::move(c.a);
@@ -274,7 +274,8 @@ PackSplitResult split_charts_for_packing(const Mesh& mesh, Atlas& atlas, const P
   const auto t0 = std::chrono::steady_clock::now();
   PackSplitResult result;
   const int nc = atlas.num_charts();
-  const int budget = options.max_added >= 0 ? options.max_added : std::min(nc, std::max(0, options.target_charts - nc));
+  const int budget =
+      options.max_added >= 0 ? options.max_added : std::min(nc, std::max(0, options.target_charts - nc));
   if (nc == 0 || budget == 0) return result;
   std::vector<ChartData> data(nc);
   {
@@ -324,7 +325,8 @@ PackSplitResult split_charts_for_packing(const Mesh& mesh, Atlas& atlas, const P
     double rect = 0;
     Scratch s;
     for (const Piece& p : pieces) {
-      s.reset(static_cast<int>(data[p.chart].chart.tris.size()), static_cast<int>(data[p.chart].chart.uv.size()));
+      s.reset(static_cast<int>(data[p.chart].chart.tris.size()),
+              static_cast<int>(data[p.chart].chart.uv.size()));
       rect += packed_rect(data[p.chart], p.faces, s);
     }
     return rect > 0 ? total_area / rect : 0;
@@ -403,13 +405,14 @@ PackSplitResult split_charts_for_packing(const Mesh& mesh, Atlas& atlas, const P
 }
 
 PackResult split_and_pack_atlas(const Mesh& mesh, Atlas& atlas, const PackOptions& pack,
-                                const PackSplitOptions& options, const Progress& progress, PackSplitResult* split) {
+                                const PackSplitOptions& options, const Progress& progress,
+                                PackSplitResult* split) {
   const auto t0 = std::chrono::steady_clock::now();
   // Two cut levels, the coarse one a prefix of the fine one (the same greedy sequence,
   // stopped at a higher gain): which packs best is not predictable, so both are packed.
   const int nc = atlas.num_charts();
-  const int budget = options.max_added >= 0 ? options.max_added
-                                            : std::min(nc, std::max(0, options.target_charts - nc));
+  const int budget =
+      options.max_added >= 0 ? options.max_added : std::min(nc, std::max(0, options.target_charts - nc));
   PackSplitOptions coarse = options;
   coarse.max_added = budget;
   coarse.min_gain = options.min_gain * kCoarseGain;

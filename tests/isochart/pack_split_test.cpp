@@ -1,6 +1,6 @@
-#include <catch2/catch.hpp>
 #include <tbb/global_control.h>
 
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <set>
 #include <vector>
@@ -138,5 +138,6 @@ TEST_CASE("cutting charts is identical with 1 and 2 threads", "[pack]") {
   CHECK(a1.face_chart == a2.face_chart);
   CHECK(a1.face_uvs == a2.face_uvs);
   REQUIRE(a1.uvs.size() == a2.uvs.size());
-  for (std::size_t i = 0; i < a1.uvs.size(); ++i) CHECK((a1.uvs[i].x == a2.uvs[i].x && a1.uvs[i].y == a2.uvs[i].y));
+  for (std::size_t i = 0; i < a1.uvs.size(); ++i)
+    CHECK((a1.uvs[i].x == a2.uvs[i].x && a1.uvs[i].y == a2.uvs[i].y));
 }

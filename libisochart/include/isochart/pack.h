@@ -153,7 +153,8 @@ struct PackSplitResult {
 /// pieces can be cut again. Charts are renumbered by their smallest face id; the new UVs
 /// are the unpacked input layouts, so call pack_atlas next. Deterministic, identical for
 /// any number of TBB threads.
-PackSplitResult split_charts_for_packing(const Mesh& mesh, Atlas& atlas, const PackSplitOptions& options = {});
+PackSplitResult split_charts_for_packing(const Mesh& mesh, Atlas& atlas,
+                                         const PackSplitOptions& options = {});
 
 /// split_charts_for_packing, then pack_atlas, keeping the best packing ratio of three: the
 /// uncut atlas, the cuts that gain at least 4·min_gain (the first cuts of the greedy
