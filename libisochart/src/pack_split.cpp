@@ -181,6 +181,35 @@ struct Cut {
   std::vector<int> a, b;
 };
 
+// A straight cut through triangles leaves a saw-tooth boundary: triangles with two of their
+// three neighbours across it. They change sides (all at once per pass, so the result does
+// not depend on an order), which shortens the seam; the pieces are re-checked afterwards.
+void smooth_cut(const ChartData& d, Cut& c, Scratch& s) {
+  for (const int f : c.a) s.label[f] = 1;
+  for (const int f : c.b) s.label[f] = 2;
+  std::vector<int> all = c.a;
+  all.insert(all.end(), c.b.begin(), c.b.end());
+  std::sort(all.begin(), all.end());
+  std::vector<int> flip;
+  for (int pass = 0; pass < 3; ++pass) {
+    flip.clear();
+    for (const int f : all) {
+      int across = 0;
+      for (int k = 0; k < 3; ++k) {
+        const int g = d.topo.opposite_face(f, k);
+        across += g >= 0 && s.label[g] != 0 && s.label[g] != s.label[f];
+      }
+      if (across >= 2) flip.push_back(f);
+    }
+    if (flip.empty()) break;
+    for (const int f : flip) s.label[f] = 3 - s.label[f];
+  }
+  c.a.clear();
+  c.b.clear();
+  for (const int f : all) (s.label[f] == 1 ? c.a : c.b).push_back(f);
+  for (const int f : all) s.label[f] = 0;
+}
+
 // Finds the best valid straight cut of a piece (sets gain 0 when there is none).
 void evaluate(const ChartData& d, Piece& p, const PackSplitOptions& o, Scratch& s) {
   p.evaluated = true;
@@ -252,7 +281,14 @@ void evaluate(const ChartData& d, Piece& p, const PackSplitOptions& o, Scratch& 
   for (int j = 0; j < m; ++j) s.label[p.faces[j]] = 0;
 
   for (Cut& c : best) {
-    if (!disk(d, c.a) || !disk(d, c.b)) continue;
+    Cut smooth = c;
+    smooth_cut(d, smooth, s);
+    if (!smooth.a.empty() && !smooth.b.empty() && disk(d, smooth.a) && disk(d, smooth.b)) {
+      smooth.gain = c.gain;
+      c = std::move(smooth);
+    } else if (!disk(d, c.a) || !disk(d, c.b)) {
+      continue;
+    }
     const StretchStats sa = piece_stretch(d, c.a), sb = piece_stretch(d, c.b);
     if (sa.flipped || sb.flipped || !(sa.l2 <= o.max_l2) || !(sb.l2 <= o.max_l2) ||
         !(sa.linf <= o.max_linf) || !(sb.linf <= o.max_linf))
