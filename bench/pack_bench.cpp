@@ -14,6 +14,9 @@
 //     --tiny N        pack N random triangles, each its own chart, instead of atlases
 //     --threads N     TBB threads (0 = default)
 //     --dump PREFIX   write each packed atlas to PREFIX<name>.ppm
+//     --atlas         treat each file as an atlas of its mesh: atlas_from_uvs, then pack_atlas,
+//                     and print the stretch, flips and exact overlaps of the result too
+//     --split         with --atlas: split_and_pack_atlas (--min-gain G, --target-charts N)
 //     --check         verify no overlaps, [0,1]² and winding after packing (the gutter
 //                     is verified exactly by tests/isochart/pack_test.cpp)
 
@@ -30,6 +33,8 @@
 #include <string>
 #include <vector>
 
+#include "isochart/atlas.h"
+#include "isochart/baselines.h"
 #include "isochart/error.h"
 #include "isochart/io.h"
 #include "isochart/mesh.h"
@@ -147,6 +152,8 @@ int main(int argc, char** argv) {
   bool check = false;
   std::string dump;
   int tiny = 0;
+  bool atlas_mode = false, split = false;
+  PackSplitOptions split_options;
   std::vector<std::string> files;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -181,6 +188,14 @@ int main(int argc, char** argv) {
       options.growth_weight = 0;
     } else if (a == "--check")
       check = true;
+    else if (a == "--atlas")
+      atlas_mode = true;
+    else if (a == "--split")
+      split = true;
+    else if (a == "--target-charts")
+      split_options.target_charts = next();
+    else if (a == "--min-gain" && i + 1 < argc)
+      split_options.min_gain = std::atof(argv[++i]);
     else if (a == "--tiny")
       tiny = next();
     else if (a == "--dump" && i + 1 < argc)
@@ -200,6 +215,45 @@ int main(int argc, char** argv) {
   if (threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
 
+  if (atlas_mode) {
+    std::printf("%-16s %6s %6s %8s %8s %8s %6s %8s %8s %8s %8s\n", "atlas", "charts", "added", "input",
+                "packing", "L2", "Linf", "flipped", "overlaps", "split s", "pack s");
+    try {
+      for (const std::string& file : files) {
+        const Mesh mesh = load_mesh(file).mesh;
+        Atlas atlas = atlas_from_uvs(mesh);
+        const int before = atlas.num_charts();
+        const double input = measure_atlas(mesh).packing_ratio;
+        PackSplitResult sr;
+        const PackResult r = split ? split_and_pack_atlas(mesh, atlas, options, split_options, {}, &sr)
+                                   : pack_atlas(mesh, atlas, options);
+        std::string name = file.substr(file.find_last_of('/') + 1);
+        std::printf("%-16s %6d %6d %8.3f %8.3f %8.4f %6.3f %8d %8lld %8.2f %8.2f  rect fill %.3f -> %.3f\n",
+                    name.c_str(), atlas.num_charts(), atlas.num_charts() - before, input,
+                    atlas.stats.packing_ratio, atlas.stats.l2, atlas.stats.linf, atlas.stats.flipped,
+                    atlas.stats.overlapping_pairs, sr.seconds, r.seconds, sr.rect_fill_before,
+                    sr.rect_fill_after);
+        std::fflush(stdout);
+        if (!dump.empty()) {
+          int count = 0;
+          const Mesh out = atlas.apply_to(mesh);
+          std::vector<int> chart = uv_charts(out, count);
+          std::vector<PackChart> pcs(count);
+          for (int f = 0; f < out.num_faces(); ++f) {
+            PackChart& c = pcs[chart[f]];
+            const int base = static_cast<int>(c.uv.size());
+            for (int k = 0; k < 3; ++k) c.uv.push_back(out.uvs[out.face_uvs[f][k]]);
+            c.faces.push_back({base, base + 1, base + 2});
+          }
+          dump_ppm(pcs, options.width, options.height, dump + name.substr(0, name.size() - 4) + ".ppm");
+        }
+      }
+    } catch (const Error& e) {
+      std::fprintf(stderr, "pack_bench: error: %s\n", e.what());
+      return 1;
+    }
+    return 0;
+  }
   std::printf("%-22s %6s %9s %9s %8s %9s %8s %8s %s\n", "atlas", "charts", "theirs", "ours", "util",
               "seconds", "scales", "variant", check ? "check" : "");
   try {

@@ -132,8 +132,13 @@ class Builder {
     });
 
     Atlas atlas = assemble(done);
-    const PackResult pr = pack_atlas(mesh_, atlas, o_.pack, progress_);
-    atlas.stats.charts_before_merge = charts_before_merge_;
+    PackSplitOptions split;
+    split.max_l2 = o_.max_l2;
+    split.max_linf = o_.max_linf;
+    split.max_added = o_.max_charts > 0 ? 0 : -1;  // --max-charts N asks for exactly N
+    PackSplitResult sr;
+    const PackResult pr = split_and_pack_atlas(mesh_, atlas, o_.pack, split, progress_, &sr);
+    atlas.stats.charts_before_merge = charts_before_merge_ + sr.added;
     atlas.stats.splits = splits_;
     atlas.stats.seed = o_.seed;
     auto& s = atlas.stats.seconds;

@@ -16,6 +16,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 #include <string>
@@ -39,6 +40,8 @@ constexpr int kMaxAttempts = 60;
 // The ladder of scales tried above the base search's result with all variants: rungs of 1%.
 constexpr int kLadderRungs = 5;
 constexpr double kLadderStep = 0.01;
+// Greedy variants at most (PackOptions::variants).
+constexpr int kMaxVariants = 32;
 
 // A chart in the packer's own frame: centred, scaled so its UV area equals its 3-D area.
 struct Prepared {
@@ -214,6 +217,51 @@ Attempt pack_once(const std::vector<ChartRaster>& rasters, int rotations, const 
   return attempt;
 }
 
+// Extension beyond §6, after the greedy packing: a chart that alone holds a side of the
+// bounding box moves into free room inside the box of the others when there is any (any
+// rotation, most contact first), which shrinks the box; repeated while that helps. The
+// greedy packing places large charts first and cannot move them when later ones leave room.
+void compact(Attempt& a, const std::vector<ChartRaster>& rasters, int rotations, int limit_w, int limit_h,
+             int gutter, double growth_weight, double area_texels) {
+  const int n = static_cast<int>(a.placed.size());
+  auto rect_of = [&](int i) {
+    const Placed& p = a.placed[i];
+    const ChartRaster& r = rasters[static_cast<std::size_t>(i) * rotations + p.rotation];
+    return Rect{p.x, p.y, r.w, r.h};
+  };
+  auto unite = [](const Rect& a0, const Rect& b) {
+    if (a0.w == 0) return b;
+    const int x0 = std::min(a0.x, b.x), y0 = std::min(a0.y, b.y);
+    const int x1 = std::max(a0.x + a0.w, b.x + b.w), y1 = std::max(a0.y + a0.h, b.y + b.h);
+    return Rect{x0, y0, x1 - x0, y1 - y0};
+  };
+  for (int round = 0; round < 4 && n > 1; ++round) {
+    bool moved = false;
+    for (int i = 0; i < n; ++i) {
+      Rect others;
+      for (int j = 0; j < n; ++j)
+        if (j != i) others = unite(others, rect_of(j));
+      if (others.area() >= a.box.area()) continue;  // not alone on any side
+      Canvas canvas(limit_w, limit_h, gutter, growth_weight);
+      for (int j = 0; j < n; ++j)
+        if (j != i) {
+          const Placed& p = a.placed[j];
+          canvas.place(rasters[static_cast<std::size_t>(j) * rotations + p.rotation], p.x, p.y);
+        }
+      const ChartRaster* r = &rasters[static_cast<std::size_t>(i) * rotations];
+      const Candidate c = canvas.best_inside(r, rotations);
+      if (!c.valid) continue;
+      const Rect box = canvas.bounds();
+      if (box.area() >= a.box.area()) continue;
+      a.placed[i] = {c.rotation, c.x, c.y, r[c.rotation].origin};
+      a.box = box;
+      moved = true;
+    }
+    if (!moved) break;
+  }
+  a.ratio = area_texels / static_cast<double>(a.box.area());
+}
+
 // A way to run the greedy packing: the order of the charts and the weight of growth.
 struct Variant {
   int order = 0;
@@ -329,13 +377,31 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
   // ladder of scales above the base's best fit is tried with all variants (both orders with
   // growth weights `growth_weight`, 0 and 2), and the largest scale that fits is kept.
   const bool small = n <= 32 && static_cast<long long>(options.width) * options.height <= 4096LL * 4096;
-  const int count = options.variants > 0 ? std::min(options.variants, 6) : (small ? 6 : 2);
+  const int count = options.variants > 0 ? std::min(options.variants, kMaxVariants) : (small ? 6 : 2);
+  // Variants beyond 6: the area order perturbed, each chart's key multiplied by a factor in
+  // [1, 2) from a hash of (chart, variant), so every run draws the same orders.
+  for (int extra = 0; extra + 6 < count; ++extra) {
+    std::vector<double> key(n);
+    for (int i = 0; i < n; ++i) {
+      std::uint64_t h = (static_cast<std::uint64_t>(i) << 32) ^ static_cast<std::uint64_t>(extra + 1);
+      h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ULL;
+      h = (h ^ (h >> 27)) * 0x94D049BB133111EBULL;
+      h ^= h >> 31;
+      key[i] = prepared[i].area * (1 + static_cast<double>(h >> 11) / 9007199254740992.0);
+    }
+    std::vector<int> o(n);
+    std::iota(o.begin(), o.end(), 0);
+    std::stable_sort(o.begin(), o.end(), [&](int a, int b) { return key[a] > key[b]; });
+    orders.push_back(std::move(o));
+  }
   std::vector<Variant> variants{{0, options.growth_weight}};
   if (count >= 2) variants.push_back({1, options.growth_weight});
   const std::vector<Variant> base = variants;
   for (const double w : {0.0, 2.0})
     for (int o = 0; o < 2; ++o)
       if (w != options.growth_weight && static_cast<int>(variants.size()) < count) variants.push_back({o, w});
+  for (int o = 2; o < static_cast<int>(orders.size()); ++o)
+    variants.push_back({o, o % 2 ? 0.0 : options.growth_weight});
   const int rungs = variants.size() > base.size() ? kLadderRungs : 0;
 
   std::atomic<int> attempts_done{0};
@@ -372,8 +438,11 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
       }
   }
   const int best_variant = best_search.variant;
-  const Attempt& best = best_search.best;
+  Attempt& best = best_search.best;
   const double fits = best_search.fits;
+  if (options.compact)
+    compact(best, rasterize_all(prepared, rotations, fits, limit_w, limit_h), rotations, limit_w, limit_h, g,
+            options.growth_weight, total_area * fits * fits);
 
   // Centre the packing in the texture; the gutter to the border is then at least g.
   const Rect& box = best.box;
