@@ -159,6 +159,10 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--width", o.pack.width, "Texture width in texels (packing)")->capture_default_str();
   sub->add_option("--height", o.pack.height, "Texture height in texels (packing)")->capture_default_str();
   sub->add_option("--gutter", o.pack.gutter, "Empty texels between charts")->capture_default_str();
+  sub->add_option("--pack-cuts", o.pack_cuts,
+                  "Extra charts cut off poorly shaped ones when that packs tighter (-1: automatic, under 12 "
+                  "charts; 0: none)")
+      ->capture_default_str();
   sub->add_option("--landmarks", o.landmarks, "Landmarks per chart for the IsoMap embedding")->capture_default_str();
   sub->add_option("--alpha", o.alpha, "Graph-cut weight of dihedral angle vs. embedding distortion")->capture_default_str();
   sub->add_flag("--no-graph-cut", args->no_graph_cut, "Skip graph-cut boundary optimization (ablation)");

@@ -135,7 +135,7 @@ class Builder {
     PackSplitOptions split;
     split.max_l2 = o_.max_l2;
     split.max_linf = o_.max_linf;
-    split.max_added = o_.max_charts > 0 ? 0 : -1;  // --max-charts N asks for exactly N
+    split.max_added = o_.max_charts > 0 ? 0 : o_.pack_cuts;  // --max-charts N asks for exactly N
     PackSplitResult sr;
     const PackResult pr = split_and_pack_atlas(mesh_, atlas, o_.pack, split, progress_, &sr);
     atlas.stats.charts_before_merge = charts_before_merge_ + sr.added;
@@ -543,6 +543,7 @@ void validate_options(const AtlasOptions& o) {
   if (!(o.max_l2 >= 1.0) || !std::isfinite(o.max_l2)) bad("--max-l2 must be a number >= 1 (1 is an isometry)");
   if (!(o.max_linf >= 1.0) || !std::isfinite(o.max_linf)) bad("--max-linf must be a number >= 1");
   if (o.max_charts < 0) bad("--max-charts must be >= 0");
+  if (o.pack_cuts < -1) bad("--pack-cuts must be -1 (automatic), 0 or more");
   if (o.landmarks < 3) bad("--landmarks must be >= 3");
   if (!(o.alpha >= 0 && o.alpha <= 1)) bad("--alpha must be in [0, 1]");
   if (!(o.medial_fraction > 0 && o.medial_fraction < 1)) bad("medial fraction must be in (0, 1)");

@@ -98,6 +98,24 @@ TEST_CASE("max_charts splits until the requested count", "[atlas]") {
   CHECK(a.num_charts() == 12);
 }
 
+TEST_CASE("pack_cuts trades extra charts for packing, within the bounds", "[atlas]") {
+  // Off by default; automatic cuts keep the best of the uncut and cut packings, so the ratio
+  // can only rise, and never more than double the charts.
+  const Mesh torus = make_builtin("torus");
+  AtlasOptions o;
+  const Atlas plain = build_atlas(torus, o);
+  o.pack_cuts = -1;
+  const Atlas cut = build_atlas(torus, o);
+  check_atlas(torus, cut, o);
+  INFO("charts " << plain.num_charts() << " -> " << cut.num_charts() << ", packing " << plain.stats.packing_ratio
+                 << " -> " << cut.stats.packing_ratio);
+  CHECK(cut.num_charts() >= plain.num_charts());
+  CHECK(cut.num_charts() <= 2 * plain.num_charts());
+  CHECK(cut.stats.packing_ratio >= plain.stats.packing_ratio);
+  o.pack_cuts = -2;
+  CHECK_THROWS_AS(build_atlas(torus, o), isochart::InputError);
+}
+
 TEST_CASE("several components are charted separately", "[atlas]") {
   Mesh a = make_builtin("sphere");
   const Mesh b = make_builtin("torus");
