@@ -77,28 +77,25 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     if (!atlas.has_uvs())
       throw isochart::InputError(a.atlas, "the atlas has no texture coordinates (vt)");
     atlas_json["source"] = a.atlas;
-  } else if (!a.signal.empty()) {
-    // A signal-specialized atlas of the geometry's own signal (normals): more samples where
-    // the surface bends, where linear reconstruction errs most.
-    isochart::AtlasOptions ao;
-    ao.seed = ctx.opts.seed;
-    isochart::SignalAtlasOptions so;
-    so.use = a.signal_use == "full" ? isochart::SignalUse::Full : isochart::SignalUse::Param;
-    const isochart::Signal signal = isochart::make_signal(input, a.signal, a.input);
-    isochart::SignalAtlasStats ss;
-    const isochart::Atlas built = isochart::build_signal_atlas(input, signal, ao, so, &ss, ctx.progress());
-    atlas = built.apply_to(input);
-    atlas_json["source"] = "iso-charts, signal " + a.signal + " (" + a.signal_use + ")";
-    atlas_json["charts"] = built.num_charts();
-    atlas_json["l2"] = built.stats.l2;
-    atlas_json["linf"] = built.stats.linf;
-    atlas_json["signal_stretch"] = ss.signal_stretch;
   } else {
     isochart::AtlasOptions ao;
     ao.seed = ctx.opts.seed;
-    const isochart::Atlas built = isochart::build_atlas(input, ao, ctx.progress());
+    isochart::Atlas built;
+    if (!a.signal.empty()) {
+      // A signal-specialized atlas of the geometry's own signal (normals): more samples where
+      // the surface bends, where linear reconstruction errs most.
+      isochart::SignalAtlasOptions so;
+      so.use = a.signal_use == "full" ? isochart::SignalUse::Full : isochart::SignalUse::Param;
+      const isochart::Signal signal = isochart::make_signal(input, a.signal, a.input);
+      isochart::SignalAtlasStats ss;
+      built = isochart::build_signal_atlas(input, signal, ao, so, &ss, ctx.progress());
+      atlas_json["source"] = "iso-charts, signal " + a.signal + " (" + a.signal_use + ")";
+      atlas_json["signal_stretch"] = ss.signal_stretch;
+    } else {
+      built = isochart::build_atlas(input, ao, ctx.progress());
+      atlas_json["source"] = "iso-charts";
+    }
     atlas = built.apply_to(input);
-    atlas_json["source"] = "iso-charts";
     atlas_json["charts"] = built.num_charts();
     atlas_json["l2"] = built.stats.l2;
     atlas_json["linf"] = built.stats.linf;

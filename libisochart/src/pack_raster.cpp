@@ -395,7 +395,12 @@ double min_area_rect_angle(const std::vector<Vec2d>& points) {
     const Vec2d d = hull[1] - hull[0];
     return -std::atan2(d.y, d.x);
   }
-  double best_area = std::numeric_limits<double>::infinity(), best_angle = 0;
+  return min_area_rect(hull).angle;
+}
+
+HullRect min_area_rect(const std::vector<Vec2d>& hull) {
+  HullRect best;
+  best.area = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < hull.size(); ++i) {
     const Vec2d d = normalized(hull[(i + 1) % hull.size()] - hull[i]);
     // Coordinates along the edge and across it: the rectangle with one side on this edge.
@@ -408,12 +413,12 @@ double min_area_rect_angle(const std::vector<Vec2d>& points) {
       v1 = std::max(v1, v);
     }
     const double area = (u1 - u0) * (v1 - v0);
-    if (area < best_area * (1 - 1e-12)) {
-      best_area = area;
-      best_angle = -std::atan2(d.y, d.x);
+    if (area < best.area * (1 - 1e-12)) {
+      best.area = area;
+      best.angle = -std::atan2(d.y, d.x);
     }
   }
-  return best_angle;
+  return best;
 }
 
 }  // namespace isochart::pack_detail

@@ -109,6 +109,14 @@ std::vector<Vec2d> convex_hull(std::vector<Vec2d> points);
 /// The rotation (radians) that turns the points' minimal-area enclosing rectangle axis-aligned.
 double min_area_rect_angle(const std::vector<Vec2d>& points);
 
+/// Minimal-area enclosing rectangle of a convex polygon of ≥ 3 vertices (counter-clockwise,
+/// as convex_hull returns): its area and the rotation (radians) that turns it axis-aligned.
+struct HullRect {
+  double area = 0;
+  double angle = 0;
+};
+HullRect min_area_rect(const std::vector<Vec2d>& hull);
+
 /// ORs `src` (`nsrc` words) shifted left by `shift` bits into `dst` (`ndst` words); bits
 /// shifted past `ndst` words are dropped.
 void or_shifted(Word* dst, int ndst, const Word* src, int nsrc, int shift);

@@ -21,6 +21,7 @@
 #include "isochart/baselines.h"
 #include "isochart/pack.h"
 #include "isochart/stretch.h"
+#include "pack_raster.h"
 
 namespace isochart {
 
@@ -60,10 +61,6 @@ struct Piece {
   double l2 = -1, linf = -1;  // of the piece itself; < 0 while it is an original chart
 };
 
-double cross3(const Vec2d& o, const Vec2d& a, const Vec2d& b) {
-  return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
-}
-
 // Scratch per evaluating thread.
 struct Scratch {
   std::vector<int> face_mark, rest_mark, vertex_mark, queue, label;
@@ -80,7 +77,9 @@ struct Scratch {
   int next() { return ++stamp; }
 };
 
-// Area of the minimal-area bounding rectangle of the vertices of `faces` (chart UV units).
+// Area of the minimal-area bounding rectangle of the vertices of `faces` (chart UV units). The
+// hull is built here from the chart's presorted vertices rather than by convex_hull, which
+// would sort again for each of the hundreds of candidate pieces.
 double rect_area(const ChartData& d, const std::vector<int>& faces, Scratch& s) {
   const int st = s.next();
   for (const int f : faces)
@@ -95,29 +94,13 @@ double rect_area(const ChartData& d, const std::vector<int>& faces, Scratch& s) 
       const int v = d.sorted_vertices[pass == 0 ? i : n - 1 - i];
       if (s.vertex_mark[v] != st) continue;
       const Vec2d& p = d.chart.uv[v];
-      while (h.size() >= start + 2 && cross3(h[h.size() - 2], h.back(), p) <= 0) h.pop_back();
+      while (h.size() >= start + 2 && cross(h.back() - h[h.size() - 2], p - h[h.size() - 2]) <= 0) h.pop_back();
       h.push_back(p);
     }
     h.pop_back();  // the last point of each chain starts the other
   }
   if (h.size() < 3) return 0;
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < h.size(); ++i) {
-    const Vec2d e = h[(i + 1) % h.size()] - h[i];
-    const double len = std::sqrt(e.x * e.x + e.y * e.y);
-    if (!(len > 0)) continue;
-    const Vec2d u{e.x / len, e.y / len};
-    double u0 = std::numeric_limits<double>::infinity(), u1 = -u0, v1 = 0;
-    for (const Vec2d& p : h) {
-      const Vec2d q = p - h[i];
-      const double a = q.x * u.x + q.y * u.y;
-      u0 = std::min(u0, a);
-      u1 = std::max(u1, a);
-      v1 = std::max(v1, std::abs(u.x * q.y - u.y * q.x));  // hull on one side of its edge
-    }
-    best = std::min(best, (u1 - u0) * v1);
-  }
-  return best;
+  return pack_detail::min_area_rect(h).area;
 }
 
 struct Sums {

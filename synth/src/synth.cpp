@@ -63,6 +63,16 @@ std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& dire
 
 namespace {
 
+// The sample at the corner of the coarser level's remesh face nearest to where a normal-shooting
+// correspondence `cr` (with a face) landed.
+int nearest_corner(const mcgim::Level& coarser, const mcgim::Correspondence& cr) {
+  const auto& corners = coarser.remesh.face_samples[cr.face];
+  int best = 0;
+  for (int c = 1; c < 3; ++c)
+    if (cr.barycentric[c] > cr.barycentric[best]) best = c;
+  return corners[best];
+}
+
 // A kd-tree over the PCA projection of components [first, first + count) of the exemplar's
 // neighbourhood vectors.
 struct KdIndex {
@@ -379,12 +389,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
       if (!has_coarse) return;
       const mcgim::Correspondence& cr = lv.coarser[s];
       if (cr.face < 0) return;
-      const auto& corners = pyramid[l + 1].remesh.face_samples[cr.face];
-      // The frame of the corner nearest to the landing point.
-      int best = 0;
-      for (int c = 1; c < 3; ++c)
-        if (cr.barycentric[c] > cr.barycentric[best]) best = c;
-      const int frame = corners[best];
+      const int frame = nearest_corner(pyramid[l + 1], cr);  // its frame orients the taps
       const int rc = nc / 2;
       for (int b = -rc; b <= rc; ++b)
         for (int a = -rc; a <= rc; ++a)
@@ -529,10 +534,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
         const mcgim::Correspondence& cr = lv.coarser[s];
         if (cr.face < 0) continue;
         const auto& corners = pyramid[l + 1].remesh.face_samples[cr.face];
-        int best = 0;
-        for (int c = 1; c < 3; ++c)
-          if (cr.barycentric[c] > cr.barycentric[best]) best = c;
-        const int cs = corners[best];
+        const int cs = nearest_corner(pyramid[l + 1], cr);
         const int pc = csrc[cg.group[cs]];
         if (pc < 0) {
           Color v{0, 0, 0};
