@@ -274,6 +274,7 @@ struct Search {
   Attempt best;
   int variant = 0;  // index into the variants searched
   int attempts = 0;
+  std::vector<ChartRaster> rasters;  // at `fits`
 };
 
 // Scale search (texels per surface unit): at each scale tried, every variant packs (in
@@ -293,7 +294,7 @@ Search search_scale(const std::vector<Prepared>& prepared, int rotations,
   while (search.attempts < kMaxAttempts) {
     tick(0);
     ++search.attempts;
-    const std::vector<ChartRaster> rasters = rasterize_all(prepared, rotations, scale, limit_w, limit_h);
+    std::vector<ChartRaster> rasters = rasterize_all(prepared, rotations, scale, limit_w, limit_h);
     std::vector<Attempt> tries(variants.size());
     tbb::parallel_for(0, static_cast<int>(variants.size()), [&](int v) {
       tries[v] = pack_once(rasters, rotations, orders[variants[v].order], limit_w, limit_h, g,
@@ -311,6 +312,7 @@ Search search_scale(const std::vector<Prepared>& prepared, int rotations,
       search.fits = scale;
       search.best = std::move(tries[ok]);
       search.variant = ok;
+      search.rasters = std::move(rasters);
     } else {
       fails = scale;
     }
@@ -417,32 +419,43 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
                              " texture with a gutter of " + std::to_string(g) + " texels");
   int attempts = best_search.attempts;
   const double base_fits = best_search.fits;
-  for (int k = 0; k <= rungs && rungs > 0; ++k) {
-    // Rung 0 is the base scale, where only the new variants can improve (a tighter box).
+  // The largest rung where some variant fits wins (its densest packing there), so the rungs
+  // are tried from the top and the search stops at the first that fits: the rungs below could
+  // not change the result. Rung 0 is the base scale, where only the new variants can improve
+  // (a tighter box). The rasters of the winning scale are kept for the compaction.
+  std::vector<ChartRaster> best_rasters;
+  for (int k = rungs; k >= 0 && rungs > 0; --k) {
     const double scale = base_fits * (1 + k * kLadderStep);
     const std::vector<Variant> tried(variants.begin() + (k == 0 ? base.size() : 0), variants.end());
     tick(0);
     ++attempts;
-    const std::vector<ChartRaster> rasters = rasterize_all(prepared, rotations, scale, limit_w, limit_h);
+    std::vector<ChartRaster> rasters =
+        k == 0 ? std::move(best_search.rasters) : rasterize_all(prepared, rotations, scale, limit_w, limit_h);
     std::vector<Attempt> tries(tried.size());
     tbb::parallel_for(0, static_cast<int>(tried.size()), [&](int v) {
       tries[v] = pack_once(rasters, rotations, orders[tried[v].order], limit_w, limit_h, g, tried[v].growth,
                            options.fill_holes, total_area * scale * scale, [](std::size_t) {});
     });
     ++attempts_done;
+    bool found = false;
     for (int v = 0; v < static_cast<int>(tries.size()); ++v)
       if (tries[v].ok && (scale > best_search.fits || tries[v].ratio > best_search.best.ratio)) {
         best_search.fits = scale;
         best_search.best = std::move(tries[v]);
         best_search.variant = v + (k == 0 ? static_cast<int>(base.size()) : 0);
+        found = true;
       }
+    if (found || k == 0) best_rasters = std::move(rasters);
+    if (best_search.fits > base_fits) break;
   }
   const int best_variant = best_search.variant;
   Attempt& best = best_search.best;
   const double fits = best_search.fits;
-  if (options.compact)
-    compact(best, rasterize_all(prepared, rotations, fits, limit_w, limit_h), rotations, limit_w, limit_h, g,
-            options.growth_weight, total_area * fits * fits);
+  if (options.compact) {
+    if (best_rasters.empty()) best_rasters = std::move(best_search.rasters);
+    if (best_rasters.empty()) best_rasters = rasterize_all(prepared, rotations, fits, limit_w, limit_h);
+    compact(best, best_rasters, rotations, limit_w, limit_h, g, options.growth_weight, total_area * fits * fits);
+  }
 
   // Centre the packing in the texture; the gutter to the border is then at least g.
   const Rect& box = best.box;
