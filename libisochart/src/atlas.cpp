@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <numeric>
 #include <set>
@@ -75,6 +76,62 @@ struct Outcome {
   StageTimes times;
 };
 
+// AtlasOptions::skip_packing: every chart scaled to its 3-D area, unrotated, its bounding box
+// placed in rows about as wide as the layout is tall, a margin of 2% of the widest box
+// between boxes; then the whole layout is scaled uniformly into [0,1]².
+void lay_out_unpacked(const Mesh& mesh, Atlas& atlas) {
+  const std::vector<detail::AtlasChart> charts = detail::split_atlas_charts(mesh, atlas);
+  const int nc = static_cast<int>(charts.size());
+  std::vector<double> scale(nc, 1.0);
+  std::vector<Vec2d> lo(nc), size(nc);
+  double box_area = 0, widest = 0;
+  for (int c = 0; c < nc; ++c) {
+    const detail::AtlasChart& ch = charts[c];
+    double a3 = 0, a2 = 0;
+    for (const Face& t : ch.tris) {
+      a3 += triangle_area(ch.positions[t[0]], ch.positions[t[1]], ch.positions[t[2]]);
+      a2 += std::abs(signed_area(ch.uv[t[0]], ch.uv[t[1]], ch.uv[t[2]]));
+    }
+    if (a2 > 0 && a3 > 0) scale[c] = std::sqrt(a3 / a2);
+    Vec2d l{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+    Vec2d h = -l;
+    for (const Vec2d& p : ch.uv) {
+      l = {std::min(l.x, p.x), std::min(l.y, p.y)};
+      h = {std::max(h.x, p.x), std::max(h.y, p.y)};
+    }
+    lo[c] = l;
+    size[c] = (h - l) * scale[c];
+    box_area += size[c].x * size[c].y;
+    widest = std::max({widest, size[c].x, size[c].y});
+  }
+  const double margin = 0.02 * widest;
+  const double row_width = std::max(std::sqrt(box_area) * 1.2, widest);
+  double x = 0, y = 0, row_height = 0, extent = 0;
+  std::vector<Vec2d> corner(nc);
+  for (int c = 0; c < nc; ++c) {
+    if (x > 0 && x + size[c].x > row_width) {
+      x = 0;
+      y += row_height + margin;
+      row_height = 0;
+    }
+    corner[c] = {x, y};
+    x += size[c].x + margin;
+    row_height = std::max(row_height, size[c].y);
+    extent = std::max({extent, corner[c].x + size[c].x, corner[c].y + size[c].y});
+  }
+  const double to_unit = extent > 0 ? 1.0 / extent : 1.0;
+  for (int c = 0; c < nc; ++c)
+    for (size_t i = 0; i < charts[c].uv_ids.size(); ++i)
+      atlas.uvs[charts[c].uv_ids[i]] = (corner[c] + (charts[c].uv[i] - lo[c]) * scale[c]) * to_unit;
+  const StretchStats st = measure_stretch(atlas.apply_to(mesh));
+  atlas.stats.charts = nc;
+  atlas.stats.l2 = st.l2;
+  atlas.stats.linf = st.linf;
+  atlas.stats.flipped = st.flipped;
+  atlas.stats.overlapping_pairs = -1;
+  atlas.stats.packing_ratio = 0;
+}
+
 class Builder {
  public:
   Builder(const Mesh& mesh, const AtlasOptions& o, const Progress& progress)
@@ -132,6 +189,28 @@ class Builder {
     });
 
     Atlas atlas = assemble(done);
+    auto& s = atlas.stats.seconds;
+    if (o_.skip_packing) {
+      lay_out_unpacked(mesh_, atlas);
+      atlas.stats.charts_before_merge = charts_before_merge_;
+    } else {
+      s["packing"] = pack(atlas);
+    }
+    atlas.stats.splits = splits_;
+    atlas.stats.seed = o_.seed;
+    s["geodesics"] = times_.geodesics;
+    s["embedding"] = times_.embedding;
+    s["optimization"] = times_.optimization;
+    s["clustering"] = times_.clustering;
+    s["graph_cut"] = times_.graph_cut;
+    s["merging"] = merge_seconds;
+    s["total"] = since(t_start);
+    return atlas;
+  }
+
+ private:
+  // Packs the atlas (§6), with the optional cuts for packing; returns the packing's seconds.
+  double pack(Atlas& atlas) const {
     PackSplitOptions split;
     split.max_l2 = o_.max_l2;
     split.max_linf = o_.max_linf;
@@ -139,21 +218,9 @@ class Builder {
     PackSplitResult sr;
     const PackResult pr = split_and_pack_atlas(mesh_, atlas, o_.pack, split, progress_, &sr);
     atlas.stats.charts_before_merge = charts_before_merge_ + sr.added;
-    atlas.stats.splits = splits_;
-    atlas.stats.seed = o_.seed;
-    auto& s = atlas.stats.seconds;
-    s["geodesics"] = times_.geodesics;
-    s["embedding"] = times_.embedding;
-    s["optimization"] = times_.optimization;
-    s["clustering"] = times_.clustering;
-    s["graph_cut"] = times_.graph_cut;
-    s["merging"] = merge_seconds;
-    s["packing"] = pr.seconds;
-    s["total"] = since(t_start);
-    return atlas;
+    return pr.seconds;
   }
 
- private:
   // Processes charts as a tree of tasks: a part is queued as soon as its parent is split, so a
   // core never waits for the slowest chart of a generation (the serial optimizer and clustering
   // of one large chart used to leave the other core idle). Every chart carries its path in the

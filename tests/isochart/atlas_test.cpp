@@ -199,3 +199,47 @@ TEST_CASE("atlas of the creature, without graph cut and without merging", "[atla
   check_atlas(creature, b, no_merge);
   CHECK(b.num_charts() == b.stats.charts_before_merge);
 }
+
+TEST_CASE("skip_packing keeps every chart's own layout, apart, in the unit square", "[atlas]") {
+  const Mesh torus = make_builtin("torus");
+  AtlasOptions o;
+  const Atlas packed = build_atlas(torus, o);
+  o.skip_packing = true;
+  Atlas loose = build_atlas(torus, o);
+  // The same charts; no packing ran.
+  REQUIRE(loose.face_chart == packed.face_chart);
+  CHECK(loose.stats.seconds.count("packing") == 0);
+  CHECK(loose.stats.packing_ratio == 0);
+  CHECK(loose.stats.overlapping_pairs == -1);
+  CHECK(loose.stats.flipped == 0);
+  CHECK(loose.stats.l2 <= o.max_l2 + 1e-9);
+  CHECK(loose.stats.linf <= o.max_linf + 1e-9);
+  // Each chart is the packed chart up to a similarity: every UV edge scaled by one factor
+  // per chart, and the same winding.
+  const Mesh ml = loose.apply_to(torus), mp = packed.apply_to(torus);
+  std::vector<double> lo(loose.num_charts(), 1e300), hi(loose.num_charts(), 0);
+  for (int f = 0; f < torus.num_faces(); ++f) {
+    const Face& fl = ml.face_uvs[f];
+    const Face& fp = mp.face_uvs[f];
+    for (int k = 0; k < 3; ++k) {
+      const double r = norm(ml.uvs[fl[(k + 1) % 3]] - ml.uvs[fl[k]]) / norm(mp.uvs[fp[(k + 1) % 3]] - mp.uvs[fp[k]]);
+      lo[loose.face_chart[f]] = std::min(lo[loose.face_chart[f]], r);
+      hi[loose.face_chart[f]] = std::max(hi[loose.face_chart[f]], r);
+    }
+    const double al = signed_area(ml.uvs[fl[0]], ml.uvs[fl[1]], ml.uvs[fl[2]]);
+    const double ap = signed_area(mp.uvs[fp[0]], mp.uvs[fp[1]], mp.uvs[fp[2]]);
+    CHECK(al * ap > 0);
+  }
+  for (int c = 0; c < loose.num_charts(); ++c) CHECK(hi[c] <= lo[c] * (1 + 1e-6));
+  // Laid out apart inside [0,1]²: no two triangles overlap.
+  CHECK(overlapping_uv_pairs(ml).empty());
+  for (const auto& uv : ml.uvs) {
+    CHECK(uv.x >= 0);
+    CHECK(uv.x <= 1 + 1e-12);
+    CHECK(uv.y >= 0);
+    CHECK(uv.y <= 1 + 1e-12);
+  }
+  // The caller packs later.
+  pack_atlas(torus, loose, o.pack);
+  check_atlas(torus, loose, o);
+}

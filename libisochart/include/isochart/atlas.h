@@ -47,6 +47,15 @@ struct AtlasOptions {
   std::uint64_t seed = 1;
   /// Packing (§6): texture size, gutter, rotations.
   PackOptions pack;
+  /// Skip the packing (§6) for callers that re-pack the charts themselves (pack_atlas, e.g.
+  /// once per texture size): each chart keeps its own parameterization, scaled so its UV area
+  /// equals its 3-D area (one texel density, as the packer would scale it) and unrotated; the
+  /// charts' bounding boxes are then laid out in rows, apart from one another, and the whole
+  /// layout is scaled uniformly into [0,1]². No gutter at any texture size, and a low packing
+  /// ratio. Stats: packing_ratio is 0, overlapping_pairs is -1 (not measured: the boxes are
+  /// disjoint and every chart was accepted without self-overlap); l2, linf and flipped are
+  /// measured as usual. pack_cuts is ignored.
+  bool skip_packing = false;
   /// Extension beyond §6: before packing, cut up to this many extra charts off poorly shaped
   /// ones (straight cuts in UV, each piece within the bounds) when that packs tighter; -1 lets
   /// the packer decide (atlases under 12 charts, at most doubling them). 0 (default) keeps the
@@ -90,7 +99,7 @@ struct AtlasStats {
   double l2 = 0;            ///< whole-atlas normalized L2 stretch
   double linf = 0;          ///< whole-atlas normalized Linf stretch
   int flipped = 0;          ///< flipped UV triangles
-  long long overlapping_pairs = 0;  ///< UV triangle pairs whose interiors overlap (exact)
+  long long overlapping_pairs = 0;  ///< UV triangle pairs whose interiors overlap (exact); -1 = not measured
   double packing_ratio = 0; ///< Σ chart UV area / UV bounding box area
   int splits = 0;           ///< chart subdivisions performed
   std::uint64_t seed = 0;
