@@ -3,14 +3,17 @@
 #include "atlas_charts.h"
 #include "isochart/atlas.h"
 
+#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_for_each.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <numeric>
 #include <set>
@@ -354,6 +357,13 @@ class Builder {
 
   // Chart merging (§6): charts, smallest first, into the neighbour with the most similar average
   // normal, whenever the merged chart still meets the bounds.
+  //
+  // Each round tries one small chart's neighbours in order, and the first success wins. A
+  // merge attempt depends only on the two charts, so its outcome is kept (keyed by each chart's
+  // smallest face and size, which name one state of a chart: charts only grow) until one side
+  // changes. With several threads, the idle ones meanwhile try the first pairs of the next
+  // small charts; later rounds find those outcomes ready. What is computed ahead changes only
+  // the time, never the result, so the atlas does not depend on the thread count.
   void merge(std::vector<DoneChart>& charts) const {
     const int total_faces = mesh_.num_faces();
     const int min_charts = std::max(1, o_.max_charts);
@@ -365,72 +375,136 @@ class Builder {
     rebuild_index();
     const std::vector<Vec3d> fn = face_normals(mesh_);
     const std::vector<double> fa = face_areas(mesh_);
-    auto avg_normal = [&](const DoneChart& c) {
-      Vec3d n;
-      for (int f : c.geometry.faces) n += fn[f] * fa[f];
-      return normalized(n);
+    std::vector<Vec3d> normals;
+    auto refresh_normals = [&] {
+      normals.assign(charts.size(), Vec3d{});
+      for (size_t c = 0; c < charts.size(); ++c) {
+        Vec3d n;
+        for (int f : charts[c].geometry.faces) n += fn[f] * fa[f];
+        normals[c] = normalized(n);
+      }
+    };
+    refresh_normals();
+    using Key = std::pair<int, size_t>;
+    auto key = [&](int c) {
+      const auto& f = charts[c].geometry.faces;
+      return Key(*std::min_element(f.begin(), f.end()), f.size());
     };
     std::vector<char> tried(charts.size(), 0);
-    std::set<std::pair<std::pair<int, size_t>, std::pair<int, size_t>>> failed;
+    std::set<std::pair<Key, Key>> failed;
+    std::map<std::pair<Key, Key>, Outcome> known;  // (small, neighbour) → outcome of merging
+    // Neighbours of chart c by decreasing normal similarity, without pairs known to fail.
+    auto neighbours_of = [&](int c) {
+      std::vector<int> nbs;
+      for (int f : charts[c].geometry.faces)
+        for (int k = 0; k < 3; ++k) {
+          const int nb = topo_.opposite_face(f, k);
+          if (nb >= 0 && chart_of[nb] != c && std::find(nbs.begin(), nbs.end(), chart_of[nb]) == nbs.end())
+            nbs.push_back(chart_of[nb]);
+        }
+      const Vec3d n0 = normals[c];
+      std::sort(nbs.begin(), nbs.end(), [&](int a, int b) {
+        const double da = dot(n0, normals[a]), db = dot(n0, normals[b]);
+        return da != db ? da > db : a < b;
+      });
+      const Key kc = key(c);
+      nbs.erase(std::remove_if(nbs.begin(), nbs.end(), [&](int nb) { return failed.count(std::minmax(kc, key(nb))) > 0; }),
+                nbs.end());
+      return nbs;
+    };
+    auto is_small = [&](int c) { return charts[c].geometry.num_faces() <= o_.merge_max_fraction * total_faces; };
+    const int threads = static_cast<int>(
+        std::min<size_t>(tbb::this_task_arena::max_concurrency(),
+                         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
     bool progress = true;
     while (progress && static_cast<int>(charts.size()) > min_charts) {
       progress = false;
-      // Smallest untried small chart.
-      int small = -1;
-      for (int c = 0; c < static_cast<int>(charts.size()); ++c) {
-        if (tried[c] || charts[c].geometry.num_faces() > o_.merge_max_fraction * total_faces) continue;
-        if (small < 0 || charts[c].geometry.num_faces() < charts[small].geometry.num_faces()) small = c;
-      }
-      if (small < 0) break;
-      tried[small] = 1;
-      std::vector<int> neighbours;
-      for (int f : charts[small].geometry.faces)
-        for (int k = 0; k < 3; ++k) {
-          const int nb = topo_.opposite_face(f, k);
-          if (nb >= 0 && chart_of[nb] != small &&
-              std::find(neighbours.begin(), neighbours.end(), chart_of[nb]) == neighbours.end())
-            neighbours.push_back(chart_of[nb]);
-        }
-      const Vec3d n0 = avg_normal(charts[small]);
-      std::sort(neighbours.begin(), neighbours.end(), [&](int a, int b) {
-        const double da = dot(n0, avg_normal(charts[a])), db = dot(n0, avg_normal(charts[b]));
-        return da != db ? da > db : a < b;
+      // Untried small charts, smallest first; the first is this round's.
+      std::vector<int> smalls;
+      for (int c = 0; c < static_cast<int>(charts.size()); ++c)
+        if (!tried[c] && is_small(c)) smalls.push_back(c);
+      if (smalls.empty()) break;
+      std::stable_sort(smalls.begin(), smalls.end(), [&](int a, int b) {
+        return charts[a].geometry.num_faces() < charts[b].geometry.num_faces();
       });
-      // Pairs that failed keep failing until one side changes: skip them.
-      auto key = [&](int c) {
-        const auto& f = charts[c].geometry.faces;
-        return std::make_pair(*std::min_element(f.begin(), f.end()), f.size());
+      const int small = smalls[0];
+      tried[small] = 1;
+      const std::vector<int> neighbours = neighbours_of(small);
+      const Key ks = key(small);
+      // This round's attempts in order, up to the first known success, then one attempt ahead
+      // for each of the next small charts while threads would otherwise idle.
+      struct Task {
+        int a, b;
+        size_t index;  // in `neighbours` for this round's chart
+        bool ahead;
       };
-      neighbours.erase(std::remove_if(neighbours.begin(), neighbours.end(),
-                                      [&](int nb) { return failed.count(std::minmax(key(small), key(nb))) > 0; }),
-                       neighbours.end());
-      // Candidates are tried in parallel; the first success in normal-similarity order wins,
-      // so the result does not depend on the thread count.
-      std::vector<Outcome> tries(neighbours.size());
-      std::atomic<size_t> first_success{neighbours.size()};
-      tbb::parallel_for(size_t(0), neighbours.size(), [&](size_t i) {
-        if (i > first_success.load()) return;  // an earlier candidate already succeeded
-        tries[i] = merge_charts(charts[small], charts[neighbours[i]]);
-        if (tries[i].accepted) {
-          size_t cur = first_success.load();
-          while (i < cur && !first_success.compare_exchange_weak(cur, i)) {
+      std::vector<Task> tasks;
+      size_t known_success = neighbours.size();
+      for (size_t i = 0; i < neighbours.size(); ++i) {
+        const auto it = known.find({ks, key(neighbours[i])});
+        if (it == known.end()) {
+          tasks.push_back({small, neighbours[i], i, false});
+        } else if (it->second.accepted) {
+          known_success = i;
+          break;
+        }
+      }
+      if (threads > 1) {
+        std::vector<Task> ahead;
+        for (size_t j = 1; j < smalls.size() && static_cast<int>(ahead.size()) < 2 * (threads - 1); ++j) {
+          const int c = smalls[j];
+          for (int nb : neighbours_of(c)) {
+            if (nb == small) continue;  // about to change, either way
+            const auto it = known.find({key(c), key(nb)});
+            if (it != known.end() && !it->second.accepted) continue;
+            if (it == known.end()) ahead.push_back({c, nb, 0, true});
+            break;
+          }
+        }
+        // The round's first attempt, then the look-ahead, then the round's other attempts.
+        tasks.insert(tasks.begin() + std::min<size_t>(1, tasks.size()), ahead.begin(), ahead.end());
+      }
+      std::vector<Outcome> results(tasks.size());
+      std::atomic<size_t> first_success{known_success};
+      std::atomic<size_t> next{0};
+      tbb::parallel_for(0, std::max(1, std::min<int>(threads, static_cast<int>(tasks.size()))), [&](int) {
+        for (size_t t = next++; t < tasks.size(); t = next++) {
+          const Task& task = tasks[t];
+          // An earlier candidate of this round already succeeded: not needed.
+          if (!task.ahead && task.index > first_success.load()) continue;
+          results[t] = merge_charts(charts[task.a], charts[task.b]);
+          if (!task.ahead && results[t].accepted) {
+            size_t cur = first_success.load();
+            while (task.index < cur && !first_success.compare_exchange_weak(cur, task.index)) {
+            }
           }
         }
       });
-      // Candidates before the winner certainly ran and failed; later ones may not have run,
-      // depending on timing, so they are not recorded (the record must not depend on threads).
       const size_t winner = first_success.load();
-      for (size_t i = 0; i < std::min(winner, neighbours.size()); ++i)
-        failed.insert(std::minmax(key(small), key(neighbours[i])));
+      for (size_t t = 0; t < tasks.size(); ++t)
+        if (tasks[t].ahead || tasks[t].index <= winner)
+          known.emplace(std::make_pair(key(tasks[t].a), key(tasks[t].b)), std::move(results[t]));
+      // Candidates before the winner all failed: recorded so that neither side retries them
+      // until one of them changes.
+      for (size_t i = 0; i < std::min(winner, neighbours.size()); ++i) failed.insert(std::minmax(ks, key(neighbours[i])));
       if (winner < neighbours.size()) {
-        const size_t i = winner;
-        const int nb = neighbours[i];
+        const int nb = neighbours[winner];
+        const Key kn = key(nb);
+        auto it = known.find({ks, kn});
         // Replace the neighbour with the merged chart and drop the small one.
-        charts[nb] = std::move(tries[i].chart);
+        charts[nb] = std::move(it->second.chart);
+        known.erase(it);
+        // Outcomes involving either old chart are stale.
+        for (auto k = known.begin(); k != known.end();) {
+          const bool stale = k->first.first == ks || k->first.second == ks || k->first.first == kn ||
+                             k->first.second == kn;
+          k = stale ? known.erase(k) : std::next(k);
+        }
         tried[nb] = 0;
         charts.erase(charts.begin() + small);
         tried.erase(tried.begin() + small);
         rebuild_index();
+        refresh_normals();
         progress = true;
       }
       if (!progress) {
