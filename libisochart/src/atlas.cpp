@@ -461,8 +461,12 @@ class Builder {
             break;
           }
         }
-        // The round's first attempt, then the look-ahead, then the round's other attempts.
-        tasks.insert(tasks.begin() + std::min<size_t>(1, tasks.size()), ahead.begin(), ahead.end());
+        // The round's first attempt, then one look-ahead, the round's other attempts (the
+        // round waits for them), and the other look-aheads last, for threads that are free.
+        if (!ahead.empty()) {
+          tasks.insert(tasks.begin() + std::min<size_t>(1, tasks.size()), ahead.front());
+          tasks.insert(tasks.end(), ahead.begin() + 1, ahead.end());
+        }
       }
       std::vector<Outcome> results(tasks.size());
       std::atomic<size_t> first_success{known_success};
