@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "isochart/error.h"
 #include "isochart/rng.h"
@@ -96,6 +97,52 @@ std::vector<ExemplarLevel> exemplar_pyramid(const Image& rgb, const std::vector<
   levels.reserve(factors.size());
   for (double f : factors) levels.push_back(resample_exemplar(rgb, f));
   return levels;
+}
+
+double correlation_length(const Image& rgb, double threshold) {
+  const int w = rgb.width, h = rgb.height, ch = rgb.channels;
+  if (w < 2 || h < 2 || ch < 1) return 0;
+  std::vector<double> centred(static_cast<std::size_t>(w) * h * ch);
+  double var = 0;
+  for (int c = 0; c < ch; ++c) {
+    double mean = 0;
+    for (int i = 0; i < w * h; ++i) mean += rgb.pixels[static_cast<std::size_t>(i) * ch + c];
+    mean /= w * h;
+    for (int i = 0; i < w * h; ++i) {
+      const double v = rgb.pixels[static_cast<std::size_t>(i) * ch + c] - mean;
+      centred[static_cast<std::size_t>(i) * ch + c] = v;
+      var += v * v;
+    }
+  }
+  var /= w * h;
+  const int max_lag = std::max(1, std::min(w, h) / 2);
+  if (var <= 1e-12) return 0;
+  // A regular sub-grid keeps the cost bounded for large exemplars.
+  const int step = std::max(1, static_cast<int>(std::ceil(std::sqrt(double(w) * h / 65536.0))));
+  const int dirs[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
+  double longest = 0;
+  for (const auto& d : dirs) {
+    const double unit = std::sqrt(double(d[0] * d[0] + d[1] * d[1]));
+    double reach = max_lag * unit;
+    for (int k = 1; k <= max_lag; ++k) {
+      const int ax = d[0] * k, ay = d[1] * k;
+      double sum = 0;
+      long long n = 0;
+      for (int y = std::max(0, -ay); y < std::min(h, h - ay); y += step)
+        for (int x = std::max(0, -ax); x < std::min(w, w - ax); x += step) {
+          const double* a = &centred[(static_cast<std::size_t>(y) * w + x) * ch];
+          const double* b = &centred[(static_cast<std::size_t>(y + ay) * w + x + ax) * ch];
+          for (int c = 0; c < ch; ++c) sum += a[c] * b[c];
+          ++n;
+        }
+      if (n == 0 || sum / n / var <= threshold) {
+        reach = k * unit;
+        break;
+      }
+    }
+    longest = std::max(longest, reach);
+  }
+  return longest;
 }
 
 std::vector<std::string> exemplar_names() { return {"bricks", "cells", "weave", "noise"}; }

@@ -26,7 +26,9 @@ using isochart::Vec2d;
 using isochart::Vec3d;
 using Color = std::array<float, 3>;
 
-std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& direction, int iterations) {
+std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& direction, int iterations,
+                                   int symmetry) {
+  if (symmetry < 1) throw isochart::InputError("", "direction-field symmetry must be at least 1");
   const std::vector<Vec3d> normals = isochart::vertex_normals(mesh);
   const bool user = isochart::norm(direction) > 0;
   const Vec3d primary = user ? isochart::normalized(direction) : Vec3d{1, 0, 0};
@@ -51,15 +53,57 @@ std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& dire
   std::vector<Vec3d> next(nv);
   for (int it = 0; it < iterations; ++it) {
     tbb::parallel_for(0, nv, [&](int i) {
-      Vec3d sum = d[i];
-      for (int j : topo.vertex_neighbors(i)) sum = sum + d[j];
-      const Vec3d p = project(sum, i);
-      next[i] = isochart::norm(p) > 1e-12 ? isochart::normalized(p) : d[i];
+      if (symmetry == 1) {
+        Vec3d sum = d[i];
+        for (int j : topo.vertex_neighbors(i)) sum = sum + d[j];
+        const Vec3d p = project(sum, i);
+        next[i] = isochart::norm(p) > 1e-12 ? isochart::normalized(p) : d[i];
+        return;
+      }
+      // N-fold: each neighbour's direction, projected into this tangent plane, as the angle
+      // φ from this vertex's direction; averaging e^{iNφ} makes the N rotations of a direction
+      // by 360°/N equivalent (Hertzmann & Zorin 2000; Palacios & Zhang 2007).
+      const Vec3d b = isochart::cross(normals[i], d[i]);
+      if (isochart::norm(d[i]) < 1e-12) {
+        next[i] = d[i];
+        return;
+      }
+      double re = 1, im = 0;
+      for (int j : topo.vertex_neighbors(i)) {
+        const Vec3d p = project(d[j], i);
+        if (isochart::norm(p) < 1e-12) continue;
+        const double phi = std::atan2(isochart::dot(p, b), isochart::dot(p, d[i]));
+        re += std::cos(symmetry * phi);
+        im += std::sin(symmetry * phi);
+      }
+      const double psi = re * re + im * im > 1e-24 ? std::atan2(im, re) / symmetry : 0.0;
+      const Vec3d q = project(d[i] * std::cos(psi) + b * std::sin(psi), i);
+      next[i] = isochart::norm(q) > 1e-12 ? isochart::normalized(q) : d[i];
     });
     std::swap(d, next);
   }
   return d;
 }
+
+namespace {
+
+// Of the `symmetry` rotations of d about `normal` by multiples of 360°/symmetry, the one
+// closest to `reference`.
+Vec3d symmetric_representative(const Vec3d& d, const Vec3d& normal, int symmetry, const Vec3d& reference) {
+  if (symmetry <= 1) return d;
+  const Vec3d b = isochart::cross(normal, d);
+  Vec3d best = d;
+  double best_dot = -std::numeric_limits<double>::infinity();
+  for (int m = 0; m < symmetry; ++m) {
+    const double a = 2 * M_PI * m / symmetry;
+    const Vec3d r = d * std::cos(a) + b * std::sin(a);
+    const double v = isochart::dot(r, reference);
+    if (v > best_dot + 1e-12) best_dot = v, best = r;
+  }
+  return best;
+}
+
+}  // namespace
 
 namespace {
 
@@ -299,6 +343,10 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   if (!(o.coherence >= 0) || !std::isfinite(o.coherence))
     throw isochart::InputError("", "coherence bias must be a non-negative number");
   if (!(o.scale >= 0) || !std::isfinite(o.scale)) throw isochart::InputError("", "scale must be positive");
+  if (o.direction_symmetry < 1 || o.direction_symmetry > 8)
+    throw isochart::InputError("", "direction symmetry must be in 1..8");
+  if (!(o.correlation_threshold > -1 && o.correlation_threshold < 1))
+    throw isochart::InputError("", "correlation threshold must lie in (-1, 1)");
   if (exemplar.channels != 3 || exemplar.width < 4 || exemplar.height < 4)
     throw isochart::InputError("", "the exemplar must be RGB and at least 4x4 (see load_exemplar)");
 
@@ -315,39 +363,136 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   for (int l = 0; l < nl; ++l) factors[l] = res.scale * pyramid[l].stats.texel_size;
   const std::vector<ExemplarLevel> ex = exemplar_pyramid(exemplar, factors);
 
-  const std::vector<Vec3d> field = direction_field(atlas, o.direction, o.relax_iterations);
+  const int n = o.neighborhood, nc = o.coarse_neighborhood;
+  // Levels too small for a neighbourhood to fit in their charts only add noise: synthesis
+  // starts at the coarsest level with enough samples (the finest one at the latest) when that
+  // level's neighbourhoods are wide enough to see the exemplar's structure; otherwise a
+  // coarse level matches blurred colours without the structure and scatters it into
+  // fragments that finer neighbourhoods, seeing even less of it, cannot reassemble, so the
+  // finest level's coherent exemplar copy is the better start.
+  int top = 0;
+  while (top + 1 < nl && pyramid[top + 1].image.num_groups >= o.min_level_samples) ++top;
+  res.correlation_length = correlation_length(exemplar, o.correlation_threshold);
+  if (o.start_level >= 0) {
+    top = std::min(top, o.start_level);
+  } else if (n * ex[top].actual_factor < res.correlation_length) {
+    top = 0;
+  }
+  res.start_level = top;
+  res.start_footprint = n * ex[top].actual_factor;
 
-  std::vector<LevelGeometry> geo;
+  const int sym = o.direction_symmetry;
+  const std::vector<Vec3d> field = direction_field(atlas, o.direction, o.relax_iterations, sym);
+  const std::vector<Vec3d> vnormals = sym > 1 ? isochart::vertex_normals(atlas) : std::vector<Vec3d>{};
+
   std::vector<std::vector<int>> reps(nl);  // a sample per zipper group
   std::vector<std::vector<int>> sources(nl);  // per level and group: its exemplar pixel or −1
+  std::vector<std::vector<Vec3d>> level_dirs(nl);  // per level and group: the tangent direction
+  for (int l = nl - 1; l >= 0; --l) {
+    const mcgim::GeometryImage& g = pyramid[l].image;
+    const int ns = g.width * g.height;
+    std::vector<Vec3d>& group_dir = level_dirs[l];
+    group_dir.assign(g.num_groups, Vec3d{0, 0, 0});
+    reps[l].assign(g.num_groups, -1);
+    for (int s = 0; s < ns; ++s) {
+      if (!g.defined(s)) continue;
+      const bool first = reps[l][g.group[s]] < 0;
+      if (first) reps[l][g.group[s]] = s;
+      const int f = g.face[s];
+      if (f < 0 || f >= atlas.num_faces()) continue;
+      Vec3d d{0, 0, 0};
+      if (sym == 1) {
+        for (int k = 0; k < 3; ++k) d = d + field[atlas.faces[f][k]] * g.barycentric[s][k];
+        group_dir[g.group[s]] = group_dir[g.group[s]] + d;
+      } else if (first) {
+        // Corners matched to the first one before blending (any of their N rotations is the
+        // same direction); one member per zipper group so that its charts agree.
+        const Vec3d ref = field[atlas.faces[f][0]];
+        for (int k = 0; k < 3; ++k) {
+          const int v = atlas.faces[f][k];
+          d = d + symmetric_representative(field[v], vnormals[v], sym, ref) * g.barycentric[s][k];
+        }
+        group_dir[g.group[s]] = d;
+      }
+    }
+    if (sym > 1 && l <= top) {
+      // One representative of the N per group, chosen to vary continuously: on finer levels
+      // the one nearest the coarser level's at the normal-shooting landing point (so that
+      // coordinate upsampling continues patches in the same orientation), on the first
+      // synthesized level breadth-first over the samples' image neighbours and zipper groups.
+      // Around the field's singularities a cut where two orientations meet is unavoidable.
+      auto rep_of = [&](int gi, const Vec3d& ref) {
+        const int s = reps[l][gi];
+        return symmetric_representative(group_dir[gi], g.normals[s], sym, ref);
+      };
+      std::vector<char> done(g.num_groups, 0);
+      if (l < top) {
+        const mcgim::GeometryImage& cg = pyramid[l + 1].image;
+        for (int gi = 0; gi < g.num_groups; ++gi) {
+          const int s = reps[l][gi];
+          if (s < 0 || isochart::norm(group_dir[gi]) < 1e-12) continue;
+          const mcgim::Correspondence& cr = pyramid[l].coarser[s];
+          if (cr.face < 0) continue;
+          const Vec3d ref = level_dirs[l + 1][cg.group[nearest_corner(pyramid[l + 1], cr)]];
+          if (isochart::norm(ref) < 1e-12) continue;
+          group_dir[gi] = rep_of(gi, ref);
+          done[gi] = 1;
+        }
+      }
+      // Group adjacency through 4-neighbours in the same chart.
+      std::vector<std::pair<int, int>> edges;
+      for (int y = 0; y < g.height; ++y)
+        for (int x = 0; x < g.width; ++x) {
+          const int s = g.index(x, y);
+          if (!g.defined(s)) continue;
+          if (x + 1 < g.width && g.defined(g.index(x + 1, y)) && g.chart[g.index(x + 1, y)] == g.chart[s])
+            edges.push_back({g.group[s], g.group[g.index(x + 1, y)]});
+          if (y + 1 < g.height && g.defined(g.index(x, y + 1)) && g.chart[g.index(x, y + 1)] == g.chart[s])
+            edges.push_back({g.group[s], g.group[g.index(x, y + 1)]});
+        }
+      const std::size_t ne = edges.size();
+      for (std::size_t i = 0; i < ne; ++i) edges.push_back({edges[i].second, edges[i].first});
+      std::sort(edges.begin(), edges.end());
+      edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+      std::vector<int> first_edge(g.num_groups + 1, 0);
+      for (const auto& e : edges) ++first_edge[e.first + 1];
+      for (int gi = 0; gi < g.num_groups; ++gi) first_edge[gi + 1] += first_edge[gi];
+      std::deque<int> queue;
+      for (int gi = 0; gi < g.num_groups; ++gi)
+        if (done[gi]) queue.push_back(gi);
+      for (int root = 0; root < g.num_groups; ++root) {
+        if (queue.empty()) {
+          if (done[root] || reps[l][root] < 0 || isochart::norm(group_dir[root]) < 1e-12) continue;
+          done[root] = 1;
+          queue.push_back(root);
+        }
+        while (!queue.empty()) {
+          const int gi = queue.front();
+          queue.pop_front();
+          for (int k = first_edge[gi]; k < first_edge[gi + 1]; ++k) {
+            const int h = edges[k].second;
+            if (done[h] || reps[l][h] < 0 || isochart::norm(group_dir[h]) < 1e-12) continue;
+            group_dir[h] = rep_of(h, group_dir[gi]);
+            done[h] = 1;
+            queue.push_back(h);
+          }
+        }
+      }
+    }
+  }
+  std::vector<LevelGeometry> geo;
   geo.reserve(nl);
   for (int l = 0; l < nl; ++l) {
     const mcgim::GeometryImage& g = pyramid[l].image;
-    const int n = g.width * g.height;
-    std::vector<Vec3d> dir(n, Vec3d{0, 0, 0}), group_dir(g.num_groups, Vec3d{0, 0, 0});
-    reps[l].assign(g.num_groups, -1);
-    for (int s = 0; s < n; ++s) {
-      if (!g.defined(s)) continue;
-      const int f = g.face[s];
-      Vec3d d{0, 0, 0};
-      if (f >= 0 && f < atlas.num_faces())
-        for (int k = 0; k < 3; ++k) d = d + field[atlas.faces[f][k]] * g.barycentric[s][k];
-      group_dir[g.group[s]] = group_dir[g.group[s]] + d;
-      if (reps[l][g.group[s]] < 0) reps[l][g.group[s]] = s;
-    }
-    for (int s = 0; s < n; ++s)
-      if (g.defined(s)) dir[s] = group_dir[g.group[s]];
+    std::vector<Vec3d> dir(static_cast<std::size_t>(g.width) * g.height, Vec3d{0, 0, 0});
+    for (int s = 0; s < g.width * g.height; ++s)
+      if (g.defined(s)) dir[s] = level_dirs[l][g.group[s]];
     geo.emplace_back(pyramid[l], dir);
   }
   isochart::report(progress, isochart::Stage::Synthesis, 0.05);
 
-  const int n = o.neighborhood, nc = o.coarse_neighborhood;
   res.group_colors.resize(nl);
   res.levels.resize(nl);
-  // Levels too small for a neighbourhood to fit in their charts only add noise: synthesis
-  // starts at the coarsest level with enough samples (the finest one at the latest).
-  int top = 0;
-  while (top + 1 < nl && pyramid[top + 1].image.num_groups >= o.min_level_samples) ++top;
   for (int l = top + 1; l < nl; ++l) {
     res.levels[l].width = pyramid[l].image.width;
     res.levels[l].height = pyramid[l].image.height;

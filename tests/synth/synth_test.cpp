@@ -327,7 +327,124 @@ TEST_CASE("synthesis copies coherent exemplar patches", "[synth]") {
   CHECK(r.levels[1].groups == 0);
   CHECK(r.group_colors[1].empty());
   so.min_level_samples = 1;
+  so.start_level = 1;
   const synth::SynthResult all = synth::synthesize(atlas, pyramid, synth::make_exemplar("bricks", 64), so);
   CHECK(all.levels[1].groups > 0);
   CHECK(all.group_colors[1].size() == static_cast<std::size_t>(pyramid[1].image.num_groups));
+}
+
+TEST_CASE("correlation length measures how far the exemplar's structure reaches", "[synth]") {
+  // A checkerboard of 4-pixel squares: along x the normalized autocorrelation is about
+  // 1 − k/2 (0.49 at k = 1, 0.03 at k = 2), along a diagonal its square: first ≤ 0.1 at
+  // k = 2 on every axis, i.e. 2√2 pixels on the diagonals.
+  Image checker(64, 64, 3);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) checker.at(x, y, c) = ((x / 4 + y / 4) % 2) ? 0.9f : 0.1f;
+  CHECK(synth::correlation_length(checker) == Approx(2 * std::sqrt(2.0)));
+  CHECK(synth::correlation_length(checker, 0.6) == Approx(std::sqrt(2.0)));
+  // Horizontal stripes never decorrelate along x: half the exemplar.
+  Image stripes(64, 48, 3);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) stripes.at(x, y, c) = (y / 3) % 2 ? 0.8f : 0.2f;
+  CHECK(synth::correlation_length(stripes) == Approx(24.0));
+  CHECK(synth::correlation_length(Image(16, 16, 3, 0.5f)) == 0.0);
+  // The procedural exemplars: rows of bricks reach across, cells and noise do not.
+  CHECK(synth::correlation_length(synth::make_exemplar("bricks", 64)) >
+        3 * synth::correlation_length(synth::make_exemplar("cells", 64)));
+}
+
+TEST_CASE("the automatic start level follows the exemplar's correlation length", "[synth]") {
+  const isochart::Mesh atlas = mcgim_test::cube_atlas(6);
+  const auto pyramid = cube_pyramid(atlas, {{48, 48}, {24, 24}});
+  synth::SynthOptions so;
+  so.scale = 16;
+  so.min_level_samples = 1;  // both levels allowed
+  Image checker(64, 64, 3), stripes(64, 64, 3);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) {
+        checker.at(x, y, c) = ((x / 4 + y / 4) % 2) ? 0.9f : 0.1f;
+        stripes.at(x, y, c) = (y / 3) % 2 ? 0.8f : 0.2f;
+      }
+  const synth::SynthResult a = synth::synthesize(atlas, pyramid, checker, so);
+  const synth::SynthResult b = synth::synthesize(atlas, pyramid, stripes, so);
+  // The 24² level's 5×5 footprint (5·16·0.33 ≈ 27 exemplar pixels) covers the
+  // checkerboard's 2.8 pixels but not the stripes' 32.
+  CHECK(a.correlation_length == Approx(2 * std::sqrt(2.0)));
+  CHECK(b.correlation_length == Approx(32.0));
+  REQUIRE(a.start_level == 1);
+  CHECK(a.start_footprint >= a.correlation_length);
+  CHECK(a.levels[1].groups > 0);
+  CHECK(b.start_level == 0);
+  CHECK(b.levels[1].groups == 0);
+  CHECK(b.group_colors[1].empty());
+  // Both are decided by comparing the coarsest allowed level's footprint.
+  CHECK(a.start_footprint == Approx(5 * a.levels[1].exemplar_factor));
+  CHECK(b.start_footprint == Approx(5 * b.levels[0].exemplar_factor));
+  // An explicit start level overrides the rule.
+  so.start_level = 1;
+  CHECK(synth::synthesize(atlas, pyramid, stripes, so).start_level == 1);
+}
+
+TEST_CASE("an N-symmetric direction field is smoother modulo 360/N degrees", "[synth]") {
+  // On a cube a 4-direction field can follow the edges everywhere; a vector field cannot.
+  const isochart::Mesh cube = mcgim_test::cube_atlas(6);
+  const isochart::Topology topo(cube);
+  const auto normals = isochart::vertex_normals(cube);
+  // Mean over edges of 1 − cos(N·φ), φ the angle between the two ends' directions after
+  // projecting the neighbour into the vertex's tangent plane.
+  auto roughness = [&](const std::vector<Vec3d>& d, int sym) {
+    double sum = 0;
+    long long count = 0;
+    for (int i = 0; i < cube.num_vertices(); ++i) {
+      const Vec3d b = isochart::cross(normals[i], d[i]);
+      for (int j : topo.vertex_neighbors(i)) {
+        const Vec3d p = d[j] - normals[i] * isochart::dot(d[j], normals[i]);
+        if (isochart::norm(p) < 1e-9) continue;
+        sum += 1 - std::cos(sym * std::atan2(isochart::dot(p, b), isochart::dot(p, d[i])));
+        ++count;
+      }
+    }
+    return sum / std::max<long long>(1, count);
+  };
+  const auto d1 = synth::direction_field(cube, {0, 0, 0}, 200, 1);
+  const auto d4 = synth::direction_field(cube, {0, 0, 0}, 200, 4);
+  REQUIRE(d4.size() == static_cast<std::size_t>(cube.num_vertices()));
+  for (int i = 0; i < cube.num_vertices(); ++i) {
+    CHECK(isochart::norm(d4[i]) == Approx(1.0));
+    CHECK(std::fabs(isochart::dot(d4[i], normals[i])) < 1e-9);
+  }
+  CHECK(roughness(d4, 4) < 0.5 * roughness(d1, 4));
+  CHECK_THROWS_AS(synth::direction_field(cube, {0, 0, 0}, 10, 0), isochart::InputError);
+}
+
+TEST_CASE("synthesis with a 2- and 4-direction field is deterministic and seamless", "[synth]") {
+  const isochart::Mesh atlas = mcgim_test::cube_atlas(6);
+  const auto pyramid = cube_pyramid(atlas, {{48, 48}, {24, 24}});
+  const Image ex = synth::make_exemplar("weave", 64);
+  for (int sym : {2, 4}) {
+    synth::SynthOptions so;
+    so.scale = 32;
+    so.direction_symmetry = sym;
+    so.min_level_samples = 1;
+    so.start_level = 1;
+    synth::SynthResult a, b;
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      a = synth::synthesize(atlas, pyramid, ex, so);
+    }
+    {
+      tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
+      b = synth::synthesize(atlas, pyramid, ex, so);
+    }
+    CHECK(a.texture.pixels == b.texture.pixels);
+    CHECK(a.match_error < 1.0);
+    CHECK(a.seam_error > 0.0);
+    CHECK(a.seam_error < 1.6);
+  }
+  synth::SynthOptions bad;
+  bad.direction_symmetry = 0;
+  CHECK_THROWS_AS(synth::synthesize(atlas, pyramid, ex, bad), isochart::InputError);
 }

@@ -36,6 +36,15 @@ ExemplarLevel resample_exemplar(const isochart::Image& rgb, double factor);
 std::vector<ExemplarLevel> exemplar_pyramid(const isochart::Image& rgb,
                                             const std::vector<double>& factors);
 
+/// Correlation length of an exemplar (original pixels): along x, y and both diagonals, the
+/// first lag at which the normalized autocorrelation of the colours (mean removed, channels
+/// summed) falls to `threshold` or below; the longest of the four. Lags stop at half the
+/// exemplar's smaller side (that value is returned when the correlation never falls). It
+/// measures how far the exemplar's structure reaches: a few pixels for cells or gravel, the
+/// whole row for the bricks photograph (mortar lines run across the image). Large exemplars
+/// are sampled on a regular sub-grid of at most about 256² pixels per lag.
+double correlation_length(const isochart::Image& rgb, double threshold = 0.1);
+
 /// Names of the procedural exemplars: "bricks", "cells", "weave", "noise".
 std::vector<std::string> exemplar_names();
 

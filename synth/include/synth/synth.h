@@ -2,8 +2,8 @@
 /// Surface texture synthesis over an MCGIM pyramid (Iso-charts §8; Wei & Levoy 2001):
 /// neighbourhoods are gathered in each chart's 2-D image domain, rotated and scaled by a smooth
 /// tangent direction field, and cross chart seams by walking over the surface into the
-/// neighbour chart. The first synthesized level (the coarsest with enough samples, see
-/// SynthOptions::min_level_samples) starts from an exemplar copy grown over the surface along
+/// neighbour chart. The first synthesized level (chosen from the exemplar's correlation length,
+/// see SynthOptions::start_level) starts from an exemplar copy grown over the surface along
 /// the field, continued across seams, then gets non-causal passes; each finer level starts from its coarser level's exemplar coordinates carried through the
 /// normal-shooting correspondence (coordinate upsampling), then gets non-causal passes in a
 /// random order over neighbourhoods of the current and the coarser level. Candidates are
@@ -49,23 +49,36 @@ struct SynthOptions {
   /// Size of the k-coherence sets (Tong et al. 2002): per exemplar pixel, its most similar
   /// neighbourhoods elsewhere, tried shifted like the coherent candidates. 0: coherent only.
   int k_coherence = 2;
-  /// Synthesis starts at the coarsest level with at least this many samples (zipper groups);
-  /// the finest level is always synthesized. On levels of a few hundred samples most
-  /// neighbourhood taps cross seams or leave the mesh and only add noise (bunny's 32² level:
-  /// 366 samples). Measured on bunny and horse at 256² (bench/README.md): from 64² (the
-  /// default) stochastic exemplars such as cells keep round cells of even size; an exemplar
-  /// with thin structure (the bricks photograph) keeps legible rows only when synthesis starts
-  /// at the finest level (20000 here: the field-following copy, then coherent passes), where
-  /// cells come out streaked.
+  /// Levels with fewer samples (zipper groups) than this are never synthesized (the finest
+  /// level always is): on levels of a few hundred samples most neighbourhood taps cross seams
+  /// or leave the mesh and only add noise (bunny's 32² level: 366 samples).
   int min_level_samples = 1000;
+  /// Where synthesis starts. −1 (automatic): at the coarsest level allowed by
+  /// `min_level_samples` when its neighbourhood footprint (`neighborhood` texels, in original
+  /// exemplar pixels) covers the exemplar's correlation length (see correlation_length), so
+  /// that its neighbourhoods see the exemplar's structure; otherwise at the finest level,
+  /// where the exemplar copy grown along the field carries the structure the coarse
+  /// neighbourhoods could not see. Measured on bunny and horse at 256² with one exemplar pixel
+  /// per finest texel (bench/README.md): cells, gravel and wicker (correlation 5–6 pixels)
+  /// start at 64², where round cells keep an even size; the bricks photograph (mortar lines
+  /// across the whole exemplar: 96 pixels) starts at 256², where brick rows stay legible.
+  /// ≥ 0: start at that pyramid index (clamped to the levels allowed by `min_level_samples`).
+  int start_level = -1;
+  /// Correlation threshold of the automatic start (see correlation_length).
+  double correlation_threshold = 0.1;
   int candidates = 8;       ///< FLANN candidates re-ranked exactly
   int pca_dims = 12;        ///< PCA dimensions of the kd-trees (more: better candidates, slower)
   int relax_iterations = 200;///< smoothing sweeps of the computed direction field
+  /// Rotational symmetry N of the computed direction field: 1 a plain vector field; N > 1 an
+  /// N-direction field (directions equal up to multiples of 360°/N), smoothed as e^{iNθ}, with
+  /// one representative per sample chosen to vary continuously within and across charts
+  /// (2 suits rows such as bricks, 4 a weave whose two strand directions look alike).
+  int direction_symmetry = 1;
   std::uint64_t seed = 1;   ///< every random choice; output independent of the thread count
 };
 
 /// Per-level figures. Seconds are wall time. Levels coarser than the first synthesized one
-/// (see SynthOptions::min_level_samples) have only their size and texel size set.
+/// (see SynthOptions::start_level) have only their size and texel size set.
 struct SynthLevelStats {
   int width = 0, height = 0;
   int exemplar_width = 0, exemplar_height = 0;  ///< exemplar pyramid level
@@ -88,6 +101,11 @@ struct SynthResult {
   /// finest exemplar level its colour was copied from, −1 when none (a sample without data).
   std::vector<int> exemplar_pixels;
   double scale = 0;  ///< exemplar pixels per unit of surface length actually used
+  int start_level = 0;  ///< pyramid index synthesis started at (see SynthOptions::start_level)
+  /// The exemplar's correlation length (original pixels) and the start level's neighbourhood
+  /// footprint (original pixels) the automatic start compared.
+  double correlation_length = 0;
+  double start_footprint = 0;
   /// Mean over finest-level samples of the squared distance between the final neighbourhood
   /// and its best exemplar match, per valid component, divided by the exemplar's variance
   /// (0 = every neighbourhood occurs in the exemplar; about 2 for unrelated noise).
@@ -118,9 +136,13 @@ isochart::Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Leve
 
 /// Per-vertex unit tangent directions of `mesh`: `direction` (or the x axis when zero, the
 /// y axis where x is nearly normal) projected into each tangent plane; when `direction` is
-/// zero, then relaxed by `iterations` sweeps of neighbour averaging.
+/// zero, then relaxed by `iterations` sweeps of neighbour averaging. With `symmetry` N > 1 the
+/// averaging treats the N rotations of a direction by 360°/N as equal (each neighbour's angle
+/// φ enters as e^{iNφ}), so the result is one representative per vertex of an N-direction
+/// field. \throw isochart::InputError when symmetry < 1.
 std::vector<isochart::Vec3d> direction_field(const isochart::Mesh& mesh,
-                                             const isochart::Vec3d& direction, int iterations);
+                                             const isochart::Vec3d& direction, int iterations,
+                                             int symmetry = 1);
 
 /// A neighbourhood tap: a weighted mix of up to four samples of one level (weights sum to 1),
 /// or missing (all weights 0) when it falls off the mesh boundary.
