@@ -129,7 +129,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   j["match_error"] = r.match_error;
   j["texel_scale_spread"] = r.texel_scale_spread;
   j["start_level"] = r.start_level;
-  j["direction_symmetry"] = so.direction_symmetry;
+  j["direction_symmetry"] = r.direction_symmetry;
   j["correlation_length"] = r.correlation_length;
   j["start_footprint"] = r.start_footprint;
   nlohmann::json jl = nlohmann::json::array();
@@ -198,7 +198,8 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(-1, 64));
   sub->add_option("--symmetry", args->symmetry,
                   "Rotational symmetry N of the computed direction field: directions equal up to "
-                  "360/N degrees (1, 2 for rows, 4 for weaves; default 1)")
+                  "360/N degrees (1: a vector field; default: 4 when the exemplar decorrelates alike "
+                  "along x and y, else 2)")
       ->check(CLI::Range(1, 8));
   sub->add_option("--atlas-size", args->atlas_size, "Texture size of the atlas output (default 1024)")
       ->check(CLI::Range(16, 8192));

@@ -3,6 +3,7 @@
 #include "synth/exemplar.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -100,8 +101,14 @@ std::vector<ExemplarLevel> exemplar_pyramid(const Image& rgb, const std::vector<
 }
 
 double correlation_length(const Image& rgb, double threshold) {
+  const std::array<double, 4> c = correlation_lengths(rgb, threshold);
+  return *std::max_element(c.begin(), c.end());
+}
+
+std::array<double, 4> correlation_lengths(const Image& rgb, double threshold) {
+  std::array<double, 4> out{{0, 0, 0, 0}};
   const int w = rgb.width, h = rgb.height, ch = rgb.channels;
-  if (w < 2 || h < 2 || ch < 1) return 0;
+  if (w < 2 || h < 2 || ch < 1) return out;
   std::vector<double> centred(static_cast<std::size_t>(w) * h * ch);
   double var = 0;
   for (int c = 0; c < ch; ++c) {
@@ -116,12 +123,12 @@ double correlation_length(const Image& rgb, double threshold) {
   }
   var /= w * h;
   const int max_lag = std::max(1, std::min(w, h) / 2);
-  if (var <= 1e-12) return 0;
+  if (var <= 1e-12) return out;
   // A regular sub-grid keeps the cost bounded for large exemplars.
   const int step = std::max(1, static_cast<int>(std::ceil(std::sqrt(double(w) * h / 65536.0))));
   const int dirs[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
-  double longest = 0;
-  for (const auto& d : dirs) {
+  for (int di = 0; di < 4; ++di) {
+    const auto& d = dirs[di];
     const double unit = std::sqrt(double(d[0] * d[0] + d[1] * d[1]));
     double reach = max_lag * unit;
     for (int k = 1; k <= max_lag; ++k) {
@@ -140,9 +147,9 @@ double correlation_length(const Image& rgb, double threshold) {
         break;
       }
     }
-    longest = std::max(longest, reach);
+    out[di] = reach;
   }
-  return longest;
+  return out;
 }
 
 std::vector<std::string> exemplar_names() { return {"bricks", "cells", "weave", "noise"}; }

@@ -11,6 +11,8 @@
 #include <numeric>
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <flann/flann.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -25,6 +27,84 @@ using isochart::Image;
 using isochart::Vec2d;
 using isochart::Vec3d;
 using Color = std::array<float, 3>;
+
+namespace {
+
+// The globally smoothest N-direction field (Knöppel et al. 2013, "Globally optimal direction
+// fields"): per vertex a complex number z in a tangent basis (e1 = the start direction, e2 =
+// n × e1) whose argument is N times the direction's angle; the field minimizing
+// Σ_edges |z_j − r_ij z_i|², r_ij = e^{iN(α_j − α_i)} the discrete Levi-Civita transport (α the
+// edge's angle in each basis), is the smallest eigenvector of that Hermitian form, found by
+// inverse iteration from the start field (z = 1), which also fixes the free global rotation.
+// N-direction fields place singularities of index k/N where a vector field needs whole ones.
+std::vector<Vec3d> smoothest_field(const isochart::Mesh& mesh, const isochart::Topology& topo,
+                                   const std::vector<Vec3d>& normals, const std::vector<Vec3d>& start,
+                                   int symmetry, int iterations) {
+  const int nv = mesh.num_vertices();
+  std::vector<Vec3d> e1(nv), e2(nv);
+  for (int i = 0; i < nv; ++i) {
+    Vec3d a = start[i];
+    if (isochart::norm(a) < 1e-12) {
+      const Vec3d axis = std::fabs(normals[i].x) < 0.9 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
+      a = axis - normals[i] * isochart::dot(axis, normals[i]);
+    }
+    e1[i] = isochart::normalized(a);
+    e2[i] = isochart::cross(normals[i], e1[i]);
+  }
+  // Real form of the Hermitian matrix A + εI on [Re z; Im z].
+  std::vector<Eigen::Triplet<double>> trip;
+  std::vector<double> diag(nv, 0.0);
+  for (int i = 0; i < nv; ++i) {
+    for (int j : topo.vertex_neighbors(i)) {
+      if (j <= i) continue;
+      const Vec3d e = mesh.positions[j] - mesh.positions[i];
+      const double ai = std::atan2(isochart::dot(e, e2[i]), isochart::dot(e, e1[i]));
+      const double aj = std::atan2(isochart::dot(e, e2[j]), isochart::dot(e, e1[j]));
+      const double c = std::cos(symmetry * (aj - ai)), sn = std::sin(symmetry * (aj - ai));
+      diag[i] += 1;
+      diag[j] += 1;
+      // A_ji = −r, A_ij = −conj(r): rows of x_j, y_j and x_i, y_i.
+      trip.emplace_back(j, i, -c);
+      trip.emplace_back(j, nv + i, sn);
+      trip.emplace_back(nv + j, i, -sn);
+      trip.emplace_back(nv + j, nv + i, -c);
+      trip.emplace_back(i, j, -c);
+      trip.emplace_back(i, nv + j, -sn);
+      trip.emplace_back(nv + i, j, sn);
+      trip.emplace_back(nv + i, nv + j, -c);
+    }
+  }
+  double mean_degree = 0;
+  for (double v : diag) mean_degree += v;
+  mean_degree = nv ? mean_degree / nv : 1;
+  const double eps = 1e-6 * std::max(1.0, mean_degree);
+  for (int i = 0; i < nv; ++i) {
+    trip.emplace_back(i, i, diag[i] + eps);
+    trip.emplace_back(nv + i, nv + i, diag[i] + eps);
+  }
+  Eigen::SparseMatrix<double> a(2 * nv, 2 * nv);
+  a.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
+  if (solver.info() != Eigen::Success) throw isochart::Error("synth: direction-field factorization failed");
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(2 * nv);
+  z.head(nv).setOnes();
+  z.normalize();
+  const int steps = std::clamp(iterations / 10, 5, 40);
+  for (int it = 0; it < steps; ++it) {
+    z = solver.solve(z);
+    const double len = z.norm();
+    if (!(len > 0) || !std::isfinite(len)) throw isochart::Error("synth: direction-field iteration diverged");
+    z /= len;
+  }
+  std::vector<Vec3d> d(nv);
+  for (int i = 0; i < nv; ++i) {
+    const double t = std::atan2(z[nv + i], z[i]) / symmetry;
+    d[i] = e1[i] * std::cos(t) + e2[i] * std::sin(t);
+  }
+  return d;
+}
+
+}  // namespace
 
 std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& direction, int iterations,
                                    int symmetry) {
@@ -50,35 +130,14 @@ std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& dire
   }
   if (user || iterations <= 0) return d;
   const isochart::Topology topo(mesh);
+  if (symmetry > 1) return smoothest_field(mesh, topo, normals, d, symmetry, iterations);
   std::vector<Vec3d> next(nv);
   for (int it = 0; it < iterations; ++it) {
     tbb::parallel_for(0, nv, [&](int i) {
-      if (symmetry == 1) {
-        Vec3d sum = d[i];
-        for (int j : topo.vertex_neighbors(i)) sum = sum + d[j];
-        const Vec3d p = project(sum, i);
-        next[i] = isochart::norm(p) > 1e-12 ? isochart::normalized(p) : d[i];
-        return;
-      }
-      // N-fold: each neighbour's direction, projected into this tangent plane, as the angle
-      // φ from this vertex's direction; averaging e^{iNφ} makes the N rotations of a direction
-      // by 360°/N equivalent (Hertzmann & Zorin 2000; Palacios & Zhang 2007).
-      const Vec3d b = isochart::cross(normals[i], d[i]);
-      if (isochart::norm(d[i]) < 1e-12) {
-        next[i] = d[i];
-        return;
-      }
-      double re = 1, im = 0;
-      for (int j : topo.vertex_neighbors(i)) {
-        const Vec3d p = project(d[j], i);
-        if (isochart::norm(p) < 1e-12) continue;
-        const double phi = std::atan2(isochart::dot(p, b), isochart::dot(p, d[i]));
-        re += std::cos(symmetry * phi);
-        im += std::sin(symmetry * phi);
-      }
-      const double psi = re * re + im * im > 1e-24 ? std::atan2(im, re) / symmetry : 0.0;
-      const Vec3d q = project(d[i] * std::cos(psi) + b * std::sin(psi), i);
-      next[i] = isochart::norm(q) > 1e-12 ? isochart::normalized(q) : d[i];
+      Vec3d sum = d[i];
+      for (int j : topo.vertex_neighbors(i)) sum = sum + d[j];
+      const Vec3d p = project(sum, i);
+      next[i] = isochart::norm(p) > 1e-12 ? isochart::normalized(p) : d[i];
     });
     std::swap(d, next);
   }
@@ -343,8 +402,10 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   if (!(o.coherence >= 0) || !std::isfinite(o.coherence))
     throw isochart::InputError("", "coherence bias must be a non-negative number");
   if (!(o.scale >= 0) || !std::isfinite(o.scale)) throw isochart::InputError("", "scale must be positive");
-  if (o.direction_symmetry < 1 || o.direction_symmetry > 8)
-    throw isochart::InputError("", "direction symmetry must be in 1..8");
+  if (o.direction_symmetry < 0 || o.direction_symmetry > 8)
+    throw isochart::InputError("", "direction symmetry must be in 0..8 (0: automatic)");
+  if (!(o.symmetry_ratio >= 1) || !std::isfinite(o.symmetry_ratio))
+    throw isochart::InputError("", "symmetry ratio must be at least 1");
   if (!(o.correlation_threshold > -1 && o.correlation_threshold < 1))
     throw isochart::InputError("", "correlation threshold must lie in (-1, 1)");
   if (exemplar.channels != 3 || exemplar.width < 4 || exemplar.height < 4)
@@ -372,7 +433,8 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   // finest level's coherent exemplar copy is the better start.
   int top = 0;
   while (top + 1 < nl && pyramid[top + 1].image.num_groups >= o.min_level_samples) ++top;
-  res.correlation_length = correlation_length(exemplar, o.correlation_threshold);
+  const std::array<double, 4> reach = correlation_lengths(exemplar, o.correlation_threshold);
+  res.correlation_length = *std::max_element(reach.begin(), reach.end());
   if (o.start_level >= 0) {
     top = std::min(top, o.start_level);
   } else if (n * ex[top].actual_factor < res.correlation_length) {
@@ -381,7 +443,15 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   res.start_level = top;
   res.start_footprint = n * ex[top].actual_factor;
 
-  const int sym = o.direction_symmetry;
+  // Automatic symmetry: an exemplar that decorrelates alike along x and y is taken as looking
+  // alike turned by 90° (4 directions); otherwise it is only taken as unchanged by a half
+  // turn (2), which keeps rows such as bricks or strands from turning by 90° at the field's
+  // cuts while still allowing half-turn singularities.
+  const double short_axis = std::min(reach[0], reach[1]), long_axis = std::max(reach[0], reach[1]);
+  const int sym = o.direction_symmetry > 0 ? o.direction_symmetry
+                  : long_axis <= o.symmetry_ratio * short_axis ? 4
+                                                                : 2;
+  res.direction_symmetry = sym;
   const std::vector<Vec3d> field = direction_field(atlas, o.direction, o.relax_iterations, sym);
   const std::vector<Vec3d> vnormals = sym > 1 ? isochart::vertex_normals(atlas) : std::vector<Vec3d>{};
 

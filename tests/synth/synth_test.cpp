@@ -244,7 +244,12 @@ TEST_CASE("isocharts synth writes textured meshes and its report", "[synth][cli]
   REQUIRE(tmp.run("synth builtin:sphere --levels 48,24 --atlas-size 128 --json -o " + tmp / "s.glb") == 0);
   std::ifstream in(tmp / "stdout.txt");
   const nlohmann::json j = nlohmann::json::parse(in);
-  for (const char* key : {"seam_error", "match_error", "texel_scale_spread", "seconds"}) CHECK(j.contains(key));
+  for (const char* key : {"seam_error", "match_error", "texel_scale_spread", "seconds", "start_level",
+                          "correlation_length", "start_footprint", "direction_symmetry"})
+    CHECK(j.contains(key));
+  // The default exemplar (procedural bricks: rows across the image) starts at the finest level.
+  CHECK(j["start_level"] == 0);
+  CHECK(j["direction_symmetry"] == 2);
   for (const char* f : {"s.glb", "s.obj", "s.mtl", "s.png", "s_mcgim.glb", "s_mcgim.obj", "s_mcgim.png"})
     CHECK(fs::exists(tmp / f));
   const Image tex = isochart::read_image(tmp / "s.png");
@@ -343,6 +348,10 @@ TEST_CASE("correlation length measures how far the exemplar's structure reaches"
       for (int c = 0; c < 3; ++c) checker.at(x, y, c) = ((x / 4 + y / 4) % 2) ? 0.9f : 0.1f;
   CHECK(synth::correlation_length(checker) == Approx(2 * std::sqrt(2.0)));
   CHECK(synth::correlation_length(checker, 0.6) == Approx(std::sqrt(2.0)));
+  const auto axes = synth::correlation_lengths(checker);
+  CHECK(axes[0] == 2.0);
+  CHECK(axes[1] == 2.0);
+  CHECK(axes[3] == Approx(2 * std::sqrt(2.0)));
   // Horizontal stripes never decorrelate along x: half the exemplar.
   Image stripes(64, 48, 3);
   for (int y = 0; y < 48; ++y)
@@ -380,6 +389,10 @@ TEST_CASE("the automatic start level follows the exemplar's correlation length",
   CHECK(b.start_level == 0);
   CHECK(b.levels[1].groups == 0);
   CHECK(b.group_colors[1].empty());
+  // Automatic field symmetry: the checkerboard decorrelates alike along x and y (4-fold), the
+  // stripes do not (2-fold).
+  CHECK(a.direction_symmetry == 4);
+  CHECK(b.direction_symmetry == 2);
   // Both are decided by comparing the coarsest allowed level's footprint.
   CHECK(a.start_footprint == Approx(5 * a.levels[1].exemplar_factor));
   CHECK(b.start_footprint == Approx(5 * b.levels[0].exemplar_factor));
@@ -445,6 +458,6 @@ TEST_CASE("synthesis with a 2- and 4-direction field is deterministic and seamle
     CHECK(a.seam_error < 1.6);
   }
   synth::SynthOptions bad;
-  bad.direction_symmetry = 0;
+  bad.direction_symmetry = -1;
   CHECK_THROWS_AS(synth::synthesize(atlas, pyramid, ex, bad), isochart::InputError);
 }

@@ -3,6 +3,7 @@
 /// texel size of each MCGIM level (the exemplar's Gaussian pyramid, Wei–Levoy 2001 §3), and the
 /// project's own procedural exemplars.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -44,6 +45,9 @@ std::vector<ExemplarLevel> exemplar_pyramid(const isochart::Image& rgb,
 /// whole row for the bricks photograph (mortar lines run across the image). Large exemplars
 /// are sampled on a regular sub-grid of at most about 256² pixels per lag.
 double correlation_length(const isochart::Image& rgb, double threshold = 0.1);
+/// The four lengths correlation_length takes the longest of: along x, y, the diagonal (+x +y)
+/// and the anti-diagonal (+x −y), in original pixels.
+std::array<double, 4> correlation_lengths(const isochart::Image& rgb, double threshold = 0.1);
 
 /// Names of the procedural exemplars: "bricks", "cells", "weave", "noise".
 std::vector<std::string> exemplar_names();

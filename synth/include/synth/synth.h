@@ -69,11 +69,15 @@ struct SynthOptions {
   int candidates = 8;       ///< FLANN candidates re-ranked exactly
   int pca_dims = 12;        ///< PCA dimensions of the kd-trees (more: better candidates, slower)
   int relax_iterations = 200;///< smoothing sweeps of the computed direction field
-  /// Rotational symmetry N of the computed direction field: 1 a plain vector field; N > 1 an
-  /// N-direction field (directions equal up to multiples of 360°/N), smoothed as e^{iNθ}, with
-  /// one representative per sample chosen to vary continuously within and across charts
-  /// (2 suits rows such as bricks, 4 a weave whose two strand directions look alike).
-  int direction_symmetry = 1;
+  /// Rotational symmetry N of the computed direction field. 1: a vector field (the x axis
+  /// projected and relaxed, see direction_field). N > 1: the globally smoothest N-direction
+  /// field (directions equal up to multiples of 360°/N), whose singularities have index k/N
+  /// instead of whole turns, with one representative per sample chosen to vary continuously
+  /// within and across charts and levels. 0: automatic, see SynthResult::direction_symmetry.
+  int direction_symmetry = 0;
+  /// Automatic symmetry: 4 when the exemplar's correlation lengths along x and y (see
+  /// correlation_lengths) differ by at most this factor, otherwise 2.
+  double symmetry_ratio = 1.5;
   std::uint64_t seed = 1;   ///< every random choice; output independent of the thread count
 };
 
@@ -102,6 +106,8 @@ struct SynthResult {
   std::vector<int> exemplar_pixels;
   double scale = 0;  ///< exemplar pixels per unit of surface length actually used
   int start_level = 0;  ///< pyramid index synthesis started at (see SynthOptions::start_level)
+  /// Symmetry N of the direction field used (see SynthOptions::direction_symmetry).
+  int direction_symmetry = 1;
   /// The exemplar's correlation length (original pixels) and the start level's neighbourhood
   /// footprint (original pixels) the automatic start compared.
   double correlation_length = 0;
@@ -135,11 +141,12 @@ isochart::Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Leve
                                   const isochart::Image& texture, int size);
 
 /// Per-vertex unit tangent directions of `mesh`: `direction` (or the x axis when zero, the
-/// y axis where x is nearly normal) projected into each tangent plane; when `direction` is
-/// zero, then relaxed by `iterations` sweeps of neighbour averaging. With `symmetry` N > 1 the
-/// averaging treats the N rotations of a direction by 360°/N as equal (each neighbour's angle
-/// φ enters as e^{iNφ}), so the result is one representative per vertex of an N-direction
-/// field. \throw isochart::InputError when symmetry < 1.
+/// y axis where x is nearly normal) projected into each tangent plane. When `direction` is
+/// zero: with `symmetry` 1, then relaxed by `iterations` sweeps of neighbour averaging; with
+/// N = `symmetry` > 1, one representative per vertex of the globally smoothest N-direction
+/// field (Knöppel et al. 2013: the smallest eigenvector of the N-fold connection Laplacian,
+/// by inverse iteration from the projected axis, min(40, max(5, iterations/10)) steps).
+/// \throw isochart::InputError when symmetry < 1.
 std::vector<isochart::Vec3d> direction_field(const isochart::Mesh& mesh,
                                              const isochart::Vec3d& direction, int iterations,
                                              int symmetry = 1);
