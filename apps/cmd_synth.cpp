@@ -132,6 +132,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   j["direction_symmetry"] = r.direction_symmetry;
   j["correlation_length"] = r.correlation_length;
   j["start_footprint"] = r.start_footprint;
+  j["smoothness"] = r.smoothness;
   nlohmann::json jl = nlohmann::json::array();
   for (const auto& l : r.levels)
     jl.push_back({{"resolution", {l.width, l.height}},
@@ -194,7 +195,8 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(1, 1 << 28));
   sub->add_option("--start-level", args->start_level,
                   "Pyramid level synthesis starts at, 0 = finest (default -1: automatic, from the "
-                  "exemplar's correlation length against the coarsest level's neighbourhood footprint)")
+                  "exemplar's correlation length against the coarsest level's neighbourhood footprint and its "
+                  "smoothness at the finest texel)")
       ->check(CLI::Range(-1, 64));
   sub->add_option("--symmetry", args->symmetry,
                   "Rotational symmetry N of the computed direction field: directions equal up to "

@@ -152,6 +152,37 @@ std::array<double, 4> correlation_lengths(const Image& rgb, double threshold) {
   return out;
 }
 
+double exemplar_smoothness(const Image& rgb, double lag) {
+  const int w = rgb.width, h = rgb.height, ch = rgb.channels;
+  const int k = std::max(1, static_cast<int>(std::lround(lag)));
+  if (w <= k || h <= k || ch < 1) return 1;
+  std::vector<double> mean(ch, 0.0);
+  for (int i = 0; i < w * h; ++i)
+    for (int c = 0; c < ch; ++c) mean[c] += rgb.pixels[static_cast<std::size_t>(i) * ch + c];
+  for (double& m : mean) m /= w * h;
+  double var = 0;
+  for (int i = 0; i < w * h; ++i)
+    for (int c = 0; c < ch; ++c) {
+      const double v = rgb.pixels[static_cast<std::size_t>(i) * ch + c] - mean[c];
+      var += v * v;
+    }
+  var /= w * h;
+  if (var <= 1e-12) return 1;
+  auto corr = [&](int ax, int ay) {
+    double sum = 0;
+    long long n = 0;
+    for (int y = 0; y + ay < h; ++y)
+      for (int x = 0; x + ax < w; ++x) {
+        for (int c = 0; c < ch; ++c)
+          sum += (rgb.pixels[(static_cast<std::size_t>(y) * w + x) * ch + c] - mean[c]) *
+                 (rgb.pixels[(static_cast<std::size_t>(y + ay) * w + x + ax) * ch + c] - mean[c]);
+        ++n;
+      }
+    return sum / n / var;
+  };
+  return std::min(corr(k, 0), corr(0, k));
+}
+
 std::vector<std::string> exemplar_names() { return {"bricks", "cells", "weave", "noise"}; }
 
 namespace {

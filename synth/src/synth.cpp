@@ -406,6 +406,8 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     throw isochart::InputError("", "direction symmetry must be in 0..8 (0: automatic)");
   if (!(o.symmetry_ratio >= 1) || !std::isfinite(o.symmetry_ratio))
     throw isochart::InputError("", "symmetry ratio must be at least 1");
+  if (!std::isfinite(o.smoothness_threshold))
+    throw isochart::InputError("", "smoothness threshold must be a number");
   if (!(o.correlation_threshold > -1 && o.correlation_threshold < 1))
     throw isochart::InputError("", "correlation threshold must lie in (-1, 1)");
   if (exemplar.channels != 3 || exemplar.width < 4 || exemplar.height < 4)
@@ -435,9 +437,10 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   while (top + 1 < nl && pyramid[top + 1].image.num_groups >= o.min_level_samples) ++top;
   const std::array<double, 4> reach = correlation_lengths(exemplar, o.correlation_threshold);
   res.correlation_length = *std::max_element(reach.begin(), reach.end());
+  res.smoothness = exemplar_smoothness(exemplar, ex[0].actual_factor);
   if (o.start_level >= 0) {
     top = std::min(top, o.start_level);
-  } else if (n * ex[top].actual_factor < res.correlation_length) {
+  } else if (n * ex[top].actual_factor < res.correlation_length || res.smoothness < o.smoothness_threshold) {
     top = 0;
   }
   res.start_level = top;

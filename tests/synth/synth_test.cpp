@@ -364,41 +364,57 @@ TEST_CASE("correlation length measures how far the exemplar's structure reaches"
         3 * synth::correlation_length(synth::make_exemplar("cells", 64)));
 }
 
-TEST_CASE("the automatic start level follows the exemplar's correlation length", "[synth]") {
+TEST_CASE("the automatic start level follows the exemplar's correlation length and smoothness", "[synth]") {
   const isochart::Mesh atlas = mcgim_test::cube_atlas(6);
   const auto pyramid = cube_pyramid(atlas, {{48, 48}, {24, 24}});
   synth::SynthOptions so;
   so.scale = 16;
   so.min_level_samples = 1;  // both levels allowed
-  Image checker(64, 64, 3), stripes(64, 64, 3);
+  // Smooth blobs (period 40 pixels), sharp 4-pixel checks, horizontal stripes.
+  Image blobs(80, 80, 3), checker(64, 64, 3), stripes(64, 64, 3);
+  for (int y = 0; y < 80; ++y)
+    for (int x = 0; x < 80; ++x)
+      for (int c = 0; c < 3; ++c)
+        blobs.at(x, y, c) = static_cast<float>(0.5 + 0.4 * std::sin(2 * M_PI * (x + 0.5) / 40) *
+                                                         std::sin(2 * M_PI * (y + 0.5) / 40));
   for (int y = 0; y < 64; ++y)
     for (int x = 0; x < 64; ++x)
       for (int c = 0; c < 3; ++c) {
         checker.at(x, y, c) = ((x / 4 + y / 4) % 2) ? 0.9f : 0.1f;
         stripes.at(x, y, c) = (y / 3) % 2 ? 0.8f : 0.2f;
       }
-  const synth::SynthResult a = synth::synthesize(atlas, pyramid, checker, so);
+  const synth::SynthResult a = synth::synthesize(atlas, pyramid, blobs, so);
   const synth::SynthResult b = synth::synthesize(atlas, pyramid, stripes, so);
-  // The 24² level's 5×5 footprint (5·16·0.33 ≈ 27 exemplar pixels) covers the
-  // checkerboard's 2.8 pixels but not the stripes' 32.
-  CHECK(a.correlation_length == Approx(2 * std::sqrt(2.0)));
-  CHECK(b.correlation_length == Approx(32.0));
+  const synth::SynthResult c = synth::synthesize(atlas, pyramid, checker, so);
+  // One finest texel is about 2.7 exemplar pixels here; the 24² level's 5×5 footprint is
+  // 5·16·0.33 ≈ 27 pixels. The blobs are smooth at 3 pixels (cos(2π·3/40) ≈ 0.89) and
+  // decorrelate within about 11: start at 24².
+  CHECK(a.smoothness > 0.85);
+  CHECK(a.correlation_length < a.start_footprint);
   REQUIRE(a.start_level == 1);
-  CHECK(a.start_footprint >= a.correlation_length);
   CHECK(a.levels[1].groups > 0);
+  CHECK(a.start_footprint == Approx(5 * a.levels[1].exemplar_factor));
+  // The stripes stay correlated along x for 32 pixels, beyond the footprint: start at 48².
+  CHECK(b.correlation_length == Approx(32.0));
   CHECK(b.start_level == 0);
   CHECK(b.levels[1].groups == 0);
   CHECK(b.group_colors[1].empty());
-  // Automatic field symmetry: the checkerboard decorrelates alike along x and y (4-fold), the
+  CHECK(b.start_footprint == Approx(5 * b.levels[0].exemplar_factor));
+  // The checks decorrelate within 3 pixels but are sharp at the texel: start at 48².
+  CHECK(c.correlation_length == Approx(2 * std::sqrt(2.0)));
+  CHECK(c.smoothness < 0.85);
+  CHECK(c.start_level == 0);
+  // Automatic field symmetry: blobs and checks decorrelate alike along x and y (4-fold), the
   // stripes do not (2-fold).
   CHECK(a.direction_symmetry == 4);
+  CHECK(c.direction_symmetry == 4);
   CHECK(b.direction_symmetry == 2);
-  // Both are decided by comparing the coarsest allowed level's footprint.
-  CHECK(a.start_footprint == Approx(5 * a.levels[1].exemplar_factor));
-  CHECK(b.start_footprint == Approx(5 * b.levels[0].exemplar_factor));
   // An explicit start level overrides the rule.
   so.start_level = 1;
   CHECK(synth::synthesize(atlas, pyramid, stripes, so).start_level == 1);
+  CHECK(synth::exemplar_smoothness(Image(8, 8, 3, 0.3f)) == 1.0);
+  // 63 pixel pairs per row, 15 of them across a check edge: (63 − 2·15) / 63.
+  CHECK(synth::exemplar_smoothness(checker, 1) == Approx(33.0 / 63));
 }
 
 TEST_CASE("an N-symmetric direction field is smoother modulo 360/N degrees", "[synth]") {

@@ -54,18 +54,25 @@ struct SynthOptions {
   /// or leave the mesh and only add noise (bunny's 32² level: 366 samples).
   int min_level_samples = 1000;
   /// Where synthesis starts. −1 (automatic): at the coarsest level allowed by
-  /// `min_level_samples` when its neighbourhood footprint (`neighborhood` texels, in original
-  /// exemplar pixels) covers the exemplar's correlation length (see correlation_length), so
-  /// that its neighbourhoods see the exemplar's structure; otherwise at the finest level,
-  /// where the exemplar copy grown along the field carries the structure the coarse
-  /// neighbourhoods could not see. Measured on bunny and horse at 256² with one exemplar pixel
-  /// per finest texel (bench/README.md): cells, gravel and wicker (correlation 5–6 pixels)
-  /// start at 64², where round cells keep an even size; the bricks photograph (mortar lines
-  /// across the whole exemplar: 96 pixels) starts at 256², where brick rows stay legible.
+  /// `min_level_samples` when (a) its neighbourhood footprint (`neighborhood` texels, in
+  /// original exemplar pixels) covers the exemplar's correlation length (see
+  /// correlation_length), so that its neighbourhoods see the exemplar's structure, and (b) the
+  /// exemplar is smooth at the finest texel (exemplar_smoothness at one finest texel ≥
+  /// `smoothness_threshold`), so that a coarse level keeps what makes it up; otherwise at the
+  /// finest level, from the exemplar copy grown along the field, which keeps structure that
+  /// coarse neighbourhoods cannot see or that coarse levels blur away. Measured on bunny and
+  /// horse at 256² with one exemplar pixel per finest texel (bench/README.md): the cells
+  /// exemplar (smoothness 0.92, correlation 5.7 pixels) starts at 64², where cells stay round
+  /// and even (from 256² they come out streaked and merged); the bricks (mortar lines across
+  /// the image: correlation 45 pixels), gravel and wicker photographs (smoothness ≤ 0.68)
+  /// start at 256², where rows, stones and strands stay crisp (from 64² gravel comes out as
+  /// flat olive patches and brick rows as fragments).
   /// ≥ 0: start at that pyramid index (clamped to the levels allowed by `min_level_samples`).
   int start_level = -1;
   /// Correlation threshold of the automatic start (see correlation_length).
   double correlation_threshold = 0.1;
+  /// Smoothness the automatic start needs to begin at a coarse level (see start_level).
+  double smoothness_threshold = 0.85;
   int candidates = 8;       ///< FLANN candidates re-ranked exactly
   int pca_dims = 12;        ///< PCA dimensions of the kd-trees (more: better candidates, slower)
   int relax_iterations = 200;///< smoothing sweeps of the computed direction field
@@ -112,6 +119,8 @@ struct SynthResult {
   /// footprint (original pixels) the automatic start compared.
   double correlation_length = 0;
   double start_footprint = 0;
+  /// exemplar_smoothness at one finest texel, which the automatic start compared too.
+  double smoothness = 0;
   /// Mean over finest-level samples of the squared distance between the final neighbourhood
   /// and its best exemplar match, per valid component, divided by the exemplar's variance
   /// (0 = every neighbourhood occurs in the exemplar; about 2 for unrelated noise).
