@@ -1,14 +1,16 @@
 #pragma once
 /// Surface texture synthesis over an MCGIM pyramid (Iso-charts §8; Wei & Levoy 2001):
 /// neighbourhoods are gathered in each chart's 2-D image domain, rotated and scaled by a smooth
-/// tangent direction field, and cross chart seams by walking over the surface into the
-/// neighbour chart. The first synthesized level (chosen from the exemplar's correlation length,
-/// see SynthOptions::start_level) starts from an exemplar copy grown over the surface along
-/// the field, continued across seams, then gets non-causal passes; each finer level starts from its coarser level's exemplar coordinates carried through the
-/// normal-shooting correspondence (coordinate upsampling), then gets non-causal passes in a
-/// random order over neighbourhoods of the current and the coarser level. Candidates are
-/// Ashikhmin coherent candidates with their k-coherence sets (Tong et al. 2002) plus a few from
-/// FLANN kd-trees on PCA-reduced neighbourhoods, re-ranked exactly with a coherence bias.
+/// tangent direction field (by default an N-direction field, N = 2 or 4 from the exemplar),
+/// and cross chart seams by walking over the surface into the neighbour chart. The first
+/// synthesized level (chosen from the exemplar's correlation length and smoothness, see
+/// SynthOptions::start_level) starts from an exemplar copy grown over the surface along the
+/// field, continued across seams, then gets non-causal passes; each finer level starts from its
+/// coarser level's exemplar coordinates carried through the normal-shooting correspondence
+/// (coordinate upsampling), then gets non-causal passes in a random order over neighbourhoods
+/// of the current and the coarser level. Candidates are Ashikhmin coherent candidates with
+/// their k-coherence sets (Tong et al. 2002) plus a few from FLANN kd-trees on PCA-reduced
+/// neighbourhoods, re-ranked exactly with a coherence bias.
 
 #include <array>
 #include <cstdint>
