@@ -2,7 +2,8 @@
 """Texture-synthesis benchmark: runs `isocharts synth` on bunny and horse with four shared
 exemplars (bricks, gravel, wicker, cells_161) over the MCGIM pyramid 256,128,64,32, renders
 each result from four sides, checks byte-identical outputs for --threads 1 and 2 on one case,
-and prints a markdown table (seam error, match error, texel-scale spread, seconds).
+and prints a markdown table (start level and direction-field symmetry the tool chose, seam
+error, match error, texel-scale spread, seconds).
 
 Usage: bench/synth_bench.py [--cli build/apps/isocharts] [--data ../shared/data]
                             [--out bench_out/synth] [--threads 2] [--pixels-per-texel 1.0]
