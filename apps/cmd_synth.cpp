@@ -131,7 +131,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   j["start_level"] = r.start_level;
   j["direction_symmetry"] = r.direction_symmetry;
   j["correlation_length"] = r.correlation_length;
-  j["start_footprint"] = r.start_footprint;
+  j["coarse_footprint"] = r.coarse_footprint;
   j["smoothness"] = r.smoothness;
   nlohmann::json jl = nlohmann::json::array();
   for (const auto& l : r.levels)

@@ -438,13 +438,13 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   const std::array<double, 4> reach = correlation_lengths(exemplar, o.correlation_threshold);
   res.correlation_length = *std::max_element(reach.begin(), reach.end());
   res.smoothness = exemplar_smoothness(exemplar, ex[0].actual_factor);
+  res.coarse_footprint = n * ex[top].actual_factor;
   if (o.start_level >= 0) {
     top = std::min(top, o.start_level);
-  } else if (n * ex[top].actual_factor < res.correlation_length || res.smoothness < o.smoothness_threshold) {
+  } else if (res.coarse_footprint < res.correlation_length || res.smoothness < o.smoothness_threshold) {
     top = 0;
   }
   res.start_level = top;
-  res.start_footprint = n * ex[top].actual_factor;
 
   // Automatic symmetry: an exemplar that decorrelates alike along x and y is taken as looking
   // alike turned by 90° (4 directions); otherwise it is only taken as unchanged by a half

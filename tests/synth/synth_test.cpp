@@ -245,7 +245,7 @@ TEST_CASE("isocharts synth writes textured meshes and its report", "[synth][cli]
   std::ifstream in(tmp / "stdout.txt");
   const nlohmann::json j = nlohmann::json::parse(in);
   for (const char* key : {"seam_error", "match_error", "texel_scale_spread", "seconds", "start_level",
-                          "correlation_length", "start_footprint", "direction_symmetry"})
+                          "correlation_length", "coarse_footprint", "smoothness", "direction_symmetry"})
     CHECK(j.contains(key));
   // The default exemplar (procedural bricks: rows across the image) starts at the finest level.
   CHECK(j["start_level"] == 0);
@@ -390,16 +390,18 @@ TEST_CASE("the automatic start level follows the exemplar's correlation length a
   // 5·16·0.33 ≈ 27 pixels. The blobs are smooth at 3 pixels (cos(2π·3/40) ≈ 0.89) and
   // decorrelate within about 11: start at 24².
   CHECK(a.smoothness > 0.85);
-  CHECK(a.correlation_length < a.start_footprint);
+  CHECK(a.correlation_length < a.coarse_footprint);
   REQUIRE(a.start_level == 1);
   CHECK(a.levels[1].groups > 0);
-  CHECK(a.start_footprint == Approx(5 * a.levels[1].exemplar_factor));
+  CHECK(a.coarse_footprint == Approx(5 * a.levels[1].exemplar_factor));
   // The stripes stay correlated along x for 32 pixels, beyond the footprint: start at 48².
   CHECK(b.correlation_length == Approx(32.0));
   CHECK(b.start_level == 0);
   CHECK(b.levels[1].groups == 0);
   CHECK(b.group_colors[1].empty());
-  CHECK(b.start_footprint == Approx(5 * b.levels[0].exemplar_factor));
+  // The footprint compared is the 24² level's, though synthesis then starts at 48².
+  CHECK(b.coarse_footprint == Approx(5 * 16 * pyramid[1].stats.texel_size).epsilon(0.1));
+  CHECK(b.coarse_footprint < b.correlation_length);
   // The checks decorrelate within 3 pixels but are sharp at the texel: start at 48².
   CHECK(c.correlation_length == Approx(2 * std::sqrt(2.0)));
   CHECK(c.smoothness < 0.85);

@@ -117,10 +117,11 @@ struct SynthResult {
   int start_level = 0;  ///< pyramid index synthesis started at (see SynthOptions::start_level)
   /// Symmetry N of the direction field used (see SynthOptions::direction_symmetry).
   int direction_symmetry = 1;
-  /// The exemplar's correlation length (original pixels) and the start level's neighbourhood
-  /// footprint (original pixels) the automatic start compared.
+  /// What the automatic start compared (see SynthOptions::start_level): the exemplar's
+  /// correlation length and the neighbourhood footprint of the coarsest level allowed by
+  /// SynthOptions::min_level_samples, both in original exemplar pixels.
   double correlation_length = 0;
-  double start_footprint = 0;
+  double coarse_footprint = 0;
   /// exemplar_smoothness at one finest texel, which the automatic start compared too.
   double smoothness = 0;
   /// Mean over finest-level samples of the squared distance between the final neighbourhood
