@@ -31,6 +31,8 @@ struct SynthArgs {
   int coarse_neighborhood = 3;
   int full_passes = -1;     // -1: the library's default
   int start_samples = -1;   // -1: the library's default
+  int start_level = -1;     // -1: automatic
+  int symmetry = -1;        // -1: the library's default
   int atlas_size = 1024;
 };
 
@@ -88,6 +90,9 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   so.coarse_neighborhood = a.coarse_neighborhood;
   if (a.full_passes >= 0) so.full_passes = a.full_passes;
   if (a.start_samples >= 0) so.min_level_samples = a.start_samples;
+  if (a.start_level < -1) bad_option("--start-level takes a pyramid index (0 = finest) or -1 (automatic)");
+  so.start_level = a.start_level;
+  if (a.symmetry >= 1) so.direction_symmetry = a.symmetry;
   so.seed = ctx.opts.seed;
   const synth::SynthResult r = synth::synthesize(atlas, pyramid, exemplar, so, ctx.progress());
 
@@ -123,6 +128,11 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   j["seam_pairs"] = r.seam_pairs;
   j["match_error"] = r.match_error;
   j["texel_scale_spread"] = r.texel_scale_spread;
+  j["start_level"] = r.start_level;
+  j["direction_symmetry"] = r.direction_symmetry;
+  j["correlation_length"] = r.correlation_length;
+  j["coarse_footprint"] = r.coarse_footprint;
+  j["smoothness"] = r.smoothness;
   nlohmann::json jl = nlohmann::json::array();
   for (const auto& l : r.levels)
     jl.push_back({{"resolution", {l.width, l.height}},
@@ -181,8 +191,18 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--passes", args->full_passes, "Non-causal passes per level after the first synthesized (default 2)")
       ->check(CLI::Range(0, 10));
   sub->add_option("--start-samples", args->start_samples,
-                  "Start at the coarsest pyramid level with at least N samples (default 1000; 20000 starts at 256² for thin-structured exemplars such as bricks)")
+                  "Never synthesize pyramid levels with fewer samples than N (default 1000)")
       ->check(CLI::Range(1, 1 << 28));
+  sub->add_option("--start-level", args->start_level,
+                  "Pyramid level synthesis starts at, 0 = finest (default -1: automatic, from the "
+                  "exemplar's correlation length against the coarsest level's neighbourhood footprint and its "
+                  "smoothness at the finest texel)")
+      ->check(CLI::Range(-1, 64));
+  sub->add_option("--symmetry", args->symmetry,
+                  "Rotational symmetry N of the computed direction field: directions equal up to "
+                  "360/N degrees (1: a vector field; default: 4 when the exemplar decorrelates alike "
+                  "along x and y, else 2)")
+      ->check(CLI::Range(1, 8));
   sub->add_option("--atlas-size", args->atlas_size, "Texture size of the atlas output (default 1024)")
       ->check(CLI::Range(16, 8192));
   sub->footer("Example:\n  isocharts synth builtin:creature -o creature.glb && "

@@ -2,7 +2,8 @@
 """Texture-synthesis benchmark: runs `isocharts synth` on bunny and horse with four shared
 exemplars (bricks, gravel, wicker, cells_161) over the MCGIM pyramid 256,128,64,32, renders
 each result from four sides, checks byte-identical outputs for --threads 1 and 2 on one case,
-and prints a markdown table (seam error, match error, texel-scale spread, seconds).
+and prints a markdown table (start level and direction-field symmetry the tool chose, seam
+error, match error, texel-scale spread, seconds).
 
 Usage: bench/synth_bench.py [--cli build/apps/isocharts] [--data ../shared/data]
                             [--out bench_out/synth] [--threads 2] [--pixels-per-texel 1.0]
@@ -88,12 +89,16 @@ def main():
         det = "bunny + cells_161, seed 5: --threads 1 vs 2 outputs (glb, obj, png; atlas and MCGIM) %s" % (
             "byte-identical" if same else "DIFFER")
 
-    lines = ["| mesh | exemplar | charts | seam error | match error | texel-scale spread | synthesis s | total s |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| mesh | exemplar | charts | start level | field N | seam error | match error | texel-scale spread "
+             "| synthesis s | total s |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for mesh_name, ex_name, j, wall, _ in rows:
         se = j["seam_error"]
-        lines.append("| %s | %s | %d | %s | %.3f | %.3f | %.1f | %.1f |" % (
-            mesh_name, ex_name, j["charts"], "n/a" if se is None else "%.3f" % se, j["match_error"],
+        start = j.get("start_level")
+        level = "%d²" % j["levels"][start]["resolution"][0] if start is not None else "?"
+        lines.append("| %s | %s | %d | %s | %s | %s | %.3f | %.3f | %.1f | %.1f |" % (
+            mesh_name, ex_name, j["charts"], level, j.get("direction_symmetry", "?"),
+            "n/a" if se is None else "%.3f" % se, j["match_error"],
             j["texel_scale_spread"], j["seconds_breakdown"]["synthesis"], j["seconds"]))
     text = "\n".join(lines) + "\n"
     if det:

@@ -3,8 +3,10 @@
 #include "synth/exemplar.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "isochart/error.h"
 #include "isochart/rng.h"
@@ -96,6 +98,89 @@ std::vector<ExemplarLevel> exemplar_pyramid(const Image& rgb, const std::vector<
   levels.reserve(factors.size());
   for (double f : factors) levels.push_back(resample_exemplar(rgb, f));
   return levels;
+}
+
+double correlation_length(const Image& rgb, double threshold) {
+  const std::array<double, 4> c = correlation_lengths(rgb, threshold);
+  return *std::max_element(c.begin(), c.end());
+}
+
+std::array<double, 4> correlation_lengths(const Image& rgb, double threshold) {
+  std::array<double, 4> out{{0, 0, 0, 0}};
+  const int w = rgb.width, h = rgb.height, ch = rgb.channels;
+  if (w < 2 || h < 2 || ch < 1) return out;
+  std::vector<double> centred(static_cast<std::size_t>(w) * h * ch);
+  double var = 0;
+  for (int c = 0; c < ch; ++c) {
+    double mean = 0;
+    for (int i = 0; i < w * h; ++i) mean += rgb.pixels[static_cast<std::size_t>(i) * ch + c];
+    mean /= w * h;
+    for (int i = 0; i < w * h; ++i) {
+      const double v = rgb.pixels[static_cast<std::size_t>(i) * ch + c] - mean;
+      centred[static_cast<std::size_t>(i) * ch + c] = v;
+      var += v * v;
+    }
+  }
+  var /= w * h;
+  const int max_lag = std::max(1, std::min(w, h) / 2);
+  if (var <= 1e-12) return out;
+  // A regular sub-grid keeps the cost bounded for large exemplars.
+  const int step = std::max(1, static_cast<int>(std::ceil(std::sqrt(double(w) * h / 65536.0))));
+  const int dirs[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
+  for (int di = 0; di < 4; ++di) {
+    const auto& d = dirs[di];
+    const double unit = std::sqrt(double(d[0] * d[0] + d[1] * d[1]));
+    double reach = max_lag * unit;
+    for (int k = 1; k <= max_lag; ++k) {
+      const int ax = d[0] * k, ay = d[1] * k;
+      double sum = 0;
+      long long n = 0;
+      for (int y = std::max(0, -ay); y < std::min(h, h - ay); y += step)
+        for (int x = std::max(0, -ax); x < std::min(w, w - ax); x += step) {
+          const double* a = &centred[(static_cast<std::size_t>(y) * w + x) * ch];
+          const double* b = &centred[(static_cast<std::size_t>(y + ay) * w + x + ax) * ch];
+          for (int c = 0; c < ch; ++c) sum += a[c] * b[c];
+          ++n;
+        }
+      if (n == 0 || sum / n / var <= threshold) {
+        reach = k * unit;
+        break;
+      }
+    }
+    out[di] = reach;
+  }
+  return out;
+}
+
+double exemplar_smoothness(const Image& rgb, double lag) {
+  const int w = rgb.width, h = rgb.height, ch = rgb.channels;
+  const int k = std::max(1, static_cast<int>(std::lround(lag)));
+  if (w <= k || h <= k || ch < 1) return 1;
+  std::vector<double> mean(ch, 0.0);
+  for (int i = 0; i < w * h; ++i)
+    for (int c = 0; c < ch; ++c) mean[c] += rgb.pixels[static_cast<std::size_t>(i) * ch + c];
+  for (double& m : mean) m /= w * h;
+  double var = 0;
+  for (int i = 0; i < w * h; ++i)
+    for (int c = 0; c < ch; ++c) {
+      const double v = rgb.pixels[static_cast<std::size_t>(i) * ch + c] - mean[c];
+      var += v * v;
+    }
+  var /= w * h;
+  if (var <= 1e-12) return 1;
+  auto corr = [&](int ax, int ay) {
+    double sum = 0;
+    long long n = 0;
+    for (int y = 0; y + ay < h; ++y)
+      for (int x = 0; x + ax < w; ++x) {
+        for (int c = 0; c < ch; ++c)
+          sum += (rgb.pixels[(static_cast<std::size_t>(y) * w + x) * ch + c] - mean[c]) *
+                 (rgb.pixels[(static_cast<std::size_t>(y + ay) * w + x + ax) * ch + c] - mean[c]);
+        ++n;
+      }
+    return sum / n / var;
+  };
+  return std::min(corr(k, 0), corr(0, k));
 }
 
 std::vector<std::string> exemplar_names() { return {"bricks", "cells", "weave", "noise"}; }

@@ -11,6 +11,8 @@
 #include <numeric>
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <flann/flann.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -26,7 +28,87 @@ using isochart::Vec2d;
 using isochart::Vec3d;
 using Color = std::array<float, 3>;
 
-std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& direction, int iterations) {
+namespace {
+
+// The globally smoothest N-direction field (Knöppel et al. 2013, "Globally optimal direction
+// fields"): per vertex a complex number z in a tangent basis (e1 = the start direction, e2 =
+// n × e1) whose argument is N times the direction's angle; the field minimizing
+// Σ_edges |z_j − r_ij z_i|², r_ij = e^{iN(α_j − α_i)} the discrete Levi-Civita transport (α the
+// edge's angle in each basis), is the smallest eigenvector of that Hermitian form, found by
+// inverse iteration from the start field (z = 1), which also fixes the free global rotation.
+// N-direction fields place singularities of index k/N where a vector field needs whole ones.
+std::vector<Vec3d> smoothest_field(const isochart::Mesh& mesh, const isochart::Topology& topo,
+                                   const std::vector<Vec3d>& normals, const std::vector<Vec3d>& start,
+                                   int symmetry, int iterations) {
+  const int nv = mesh.num_vertices();
+  std::vector<Vec3d> e1(nv), e2(nv);
+  for (int i = 0; i < nv; ++i) {
+    Vec3d a = start[i];
+    if (isochart::norm(a) < 1e-12) {
+      const Vec3d axis = std::fabs(normals[i].x) < 0.9 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
+      a = axis - normals[i] * isochart::dot(axis, normals[i]);
+    }
+    e1[i] = isochart::normalized(a);
+    e2[i] = isochart::cross(normals[i], e1[i]);
+  }
+  // Real form of the Hermitian matrix A + εI on [Re z; Im z].
+  std::vector<Eigen::Triplet<double>> trip;
+  std::vector<double> diag(nv, 0.0);
+  for (int i = 0; i < nv; ++i) {
+    for (int j : topo.vertex_neighbors(i)) {
+      if (j <= i) continue;
+      const Vec3d e = mesh.positions[j] - mesh.positions[i];
+      const double ai = std::atan2(isochart::dot(e, e2[i]), isochart::dot(e, e1[i]));
+      const double aj = std::atan2(isochart::dot(e, e2[j]), isochart::dot(e, e1[j]));
+      const double c = std::cos(symmetry * (aj - ai)), sn = std::sin(symmetry * (aj - ai));
+      diag[i] += 1;
+      diag[j] += 1;
+      // A_ji = −r, A_ij = −conj(r): rows of x_j, y_j and x_i, y_i.
+      trip.emplace_back(j, i, -c);
+      trip.emplace_back(j, nv + i, sn);
+      trip.emplace_back(nv + j, i, -sn);
+      trip.emplace_back(nv + j, nv + i, -c);
+      trip.emplace_back(i, j, -c);
+      trip.emplace_back(i, nv + j, -sn);
+      trip.emplace_back(nv + i, j, sn);
+      trip.emplace_back(nv + i, nv + j, -c);
+    }
+  }
+  double mean_degree = 0;
+  for (double v : diag) mean_degree += v;
+  mean_degree = nv ? mean_degree / nv : 1;
+  const double eps = 1e-6 * std::max(1.0, mean_degree);
+  for (int i = 0; i < nv; ++i) {
+    trip.emplace_back(i, i, diag[i] + eps);
+    trip.emplace_back(nv + i, nv + i, diag[i] + eps);
+  }
+  Eigen::SparseMatrix<double> a(2 * nv, 2 * nv);
+  a.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
+  if (solver.info() != Eigen::Success) throw isochart::Error("synth: direction-field factorization failed");
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(2 * nv);
+  z.head(nv).setOnes();
+  z.normalize();
+  const int steps = std::clamp(iterations / 10, 5, 40);
+  for (int it = 0; it < steps; ++it) {
+    z = solver.solve(z);
+    const double len = z.norm();
+    if (!(len > 0) || !std::isfinite(len)) throw isochart::Error("synth: direction-field iteration diverged");
+    z /= len;
+  }
+  std::vector<Vec3d> d(nv);
+  for (int i = 0; i < nv; ++i) {
+    const double t = std::atan2(z[nv + i], z[i]) / symmetry;
+    d[i] = e1[i] * std::cos(t) + e2[i] * std::sin(t);
+  }
+  return d;
+}
+
+}  // namespace
+
+std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& direction, int iterations,
+                                   int symmetry) {
+  if (symmetry < 1) throw isochart::InputError("", "direction-field symmetry must be at least 1");
   const std::vector<Vec3d> normals = isochart::vertex_normals(mesh);
   const bool user = isochart::norm(direction) > 0;
   const Vec3d primary = user ? isochart::normalized(direction) : Vec3d{1, 0, 0};
@@ -48,6 +130,7 @@ std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& dire
   }
   if (user || iterations <= 0) return d;
   const isochart::Topology topo(mesh);
+  if (symmetry > 1) return smoothest_field(mesh, topo, normals, d, symmetry, iterations);
   std::vector<Vec3d> next(nv);
   for (int it = 0; it < iterations; ++it) {
     tbb::parallel_for(0, nv, [&](int i) {
@@ -60,6 +143,26 @@ std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& dire
   }
   return d;
 }
+
+namespace {
+
+// Of the `symmetry` rotations of d about `normal` by multiples of 360°/symmetry, the one
+// closest to `reference`.
+Vec3d symmetric_representative(const Vec3d& d, const Vec3d& normal, int symmetry, const Vec3d& reference) {
+  if (symmetry <= 1) return d;
+  const Vec3d b = isochart::cross(normal, d);
+  Vec3d best = d;
+  double best_dot = -std::numeric_limits<double>::infinity();
+  for (int m = 0; m < symmetry; ++m) {
+    const double a = 2 * M_PI * m / symmetry;
+    const Vec3d r = d * std::cos(a) + b * std::sin(a);
+    const double v = isochart::dot(r, reference);
+    if (v > best_dot + 1e-12) best_dot = v, best = r;
+  }
+  return best;
+}
+
+}  // namespace
 
 namespace {
 
@@ -299,6 +402,14 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   if (!(o.coherence >= 0) || !std::isfinite(o.coherence))
     throw isochart::InputError("", "coherence bias must be a non-negative number");
   if (!(o.scale >= 0) || !std::isfinite(o.scale)) throw isochart::InputError("", "scale must be positive");
+  if (o.direction_symmetry < 0 || o.direction_symmetry > 8)
+    throw isochart::InputError("", "direction symmetry must be in 0..8 (0: automatic)");
+  if (!(o.symmetry_ratio >= 1) || !std::isfinite(o.symmetry_ratio))
+    throw isochart::InputError("", "symmetry ratio must be at least 1");
+  if (!std::isfinite(o.smoothness_threshold))
+    throw isochart::InputError("", "smoothness threshold must be a number");
+  if (!(o.correlation_threshold > -1 && o.correlation_threshold < 1))
+    throw isochart::InputError("", "correlation threshold must lie in (-1, 1)");
   if (exemplar.channels != 3 || exemplar.width < 4 || exemplar.height < 4)
     throw isochart::InputError("", "the exemplar must be RGB and at least 4x4 (see load_exemplar)");
 
@@ -315,39 +426,146 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   for (int l = 0; l < nl; ++l) factors[l] = res.scale * pyramid[l].stats.texel_size;
   const std::vector<ExemplarLevel> ex = exemplar_pyramid(exemplar, factors);
 
-  const std::vector<Vec3d> field = direction_field(atlas, o.direction, o.relax_iterations);
+  const int n = o.neighborhood, nc = o.coarse_neighborhood;
+  // Levels too small for a neighbourhood to fit in their charts only add noise: synthesis
+  // starts at the coarsest level with enough samples (the finest one at the latest) when that
+  // level's neighbourhoods are wide enough to see the exemplar's structure; otherwise a
+  // coarse level matches blurred colours without the structure and scatters it into
+  // fragments that finer neighbourhoods, seeing even less of it, cannot reassemble, so the
+  // finest level's coherent exemplar copy is the better start.
+  int top = 0;
+  while (top + 1 < nl && pyramid[top + 1].image.num_groups >= o.min_level_samples) ++top;
+  const std::array<double, 4> reach = correlation_lengths(exemplar, o.correlation_threshold);
+  res.correlation_length = *std::max_element(reach.begin(), reach.end());
+  res.smoothness = exemplar_smoothness(exemplar, ex[0].actual_factor);
+  res.coarse_footprint = n * ex[top].actual_factor;
+  if (o.start_level >= 0) {
+    top = std::min(top, o.start_level);
+  } else if (res.coarse_footprint < res.correlation_length || res.smoothness < o.smoothness_threshold) {
+    top = 0;
+  }
+  res.start_level = top;
 
-  std::vector<LevelGeometry> geo;
+  // Automatic symmetry: an exemplar that decorrelates alike along x and y is taken as looking
+  // alike turned by 90° (4 directions); otherwise it is only taken as unchanged by a half
+  // turn (2), which keeps rows such as bricks or strands from turning by 90° at the field's
+  // cuts while still allowing half-turn singularities.
+  const double short_axis = std::min(reach[0], reach[1]), long_axis = std::max(reach[0], reach[1]);
+  const int sym = o.direction_symmetry > 0 ? o.direction_symmetry
+                  : long_axis <= o.symmetry_ratio * short_axis ? 4
+                                                                : 2;
+  res.direction_symmetry = sym;
+  const std::vector<Vec3d> field = direction_field(atlas, o.direction, o.relax_iterations, sym);
+  const std::vector<Vec3d> vnormals = sym > 1 ? isochart::vertex_normals(atlas) : std::vector<Vec3d>{};
+
   std::vector<std::vector<int>> reps(nl);  // a sample per zipper group
   std::vector<std::vector<int>> sources(nl);  // per level and group: its exemplar pixel or −1
+  std::vector<std::vector<Vec3d>> level_dirs(nl);  // per level and group: the tangent direction
+  for (int l = nl - 1; l >= 0; --l) {
+    const mcgim::GeometryImage& g = pyramid[l].image;
+    const int ns = g.width * g.height;
+    std::vector<Vec3d>& group_dir = level_dirs[l];
+    group_dir.assign(g.num_groups, Vec3d{0, 0, 0});
+    reps[l].assign(g.num_groups, -1);
+    for (int s = 0; s < ns; ++s) {
+      if (!g.defined(s)) continue;
+      const bool first = reps[l][g.group[s]] < 0;
+      if (first) reps[l][g.group[s]] = s;
+      const int f = g.face[s];
+      if (f < 0 || f >= atlas.num_faces()) continue;
+      Vec3d d{0, 0, 0};
+      if (sym == 1) {
+        for (int k = 0; k < 3; ++k) d = d + field[atlas.faces[f][k]] * g.barycentric[s][k];
+        group_dir[g.group[s]] = group_dir[g.group[s]] + d;
+      } else if (first) {
+        // Corners matched to the first one before blending (any of their N rotations is the
+        // same direction); one member per zipper group so that its charts agree.
+        const Vec3d ref = field[atlas.faces[f][0]];
+        for (int k = 0; k < 3; ++k) {
+          const int v = atlas.faces[f][k];
+          d = d + symmetric_representative(field[v], vnormals[v], sym, ref) * g.barycentric[s][k];
+        }
+        group_dir[g.group[s]] = d;
+      }
+    }
+    if (sym > 1 && l <= top) {
+      // One representative of the N per group, chosen to vary continuously: on finer levels
+      // the one nearest the coarser level's at the normal-shooting landing point (so that
+      // coordinate upsampling continues patches in the same orientation), on the first
+      // synthesized level breadth-first over the samples' image neighbours and zipper groups.
+      // Around the field's singularities a cut where two orientations meet is unavoidable.
+      auto rep_of = [&](int gi, const Vec3d& ref) {
+        const int s = reps[l][gi];
+        return symmetric_representative(group_dir[gi], g.normals[s], sym, ref);
+      };
+      std::vector<char> done(g.num_groups, 0);
+      if (l < top) {
+        const mcgim::GeometryImage& cg = pyramid[l + 1].image;
+        for (int gi = 0; gi < g.num_groups; ++gi) {
+          const int s = reps[l][gi];
+          if (s < 0 || isochart::norm(group_dir[gi]) < 1e-12) continue;
+          const mcgim::Correspondence& cr = pyramid[l].coarser[s];
+          if (cr.face < 0) continue;
+          const Vec3d ref = level_dirs[l + 1][cg.group[nearest_corner(pyramid[l + 1], cr)]];
+          if (isochart::norm(ref) < 1e-12) continue;
+          group_dir[gi] = rep_of(gi, ref);
+          done[gi] = 1;
+        }
+      }
+      // Group adjacency through 4-neighbours in the same chart.
+      std::vector<std::pair<int, int>> edges;
+      for (int y = 0; y < g.height; ++y)
+        for (int x = 0; x < g.width; ++x) {
+          const int s = g.index(x, y);
+          if (!g.defined(s)) continue;
+          if (x + 1 < g.width && g.defined(g.index(x + 1, y)) && g.chart[g.index(x + 1, y)] == g.chart[s])
+            edges.push_back({g.group[s], g.group[g.index(x + 1, y)]});
+          if (y + 1 < g.height && g.defined(g.index(x, y + 1)) && g.chart[g.index(x, y + 1)] == g.chart[s])
+            edges.push_back({g.group[s], g.group[g.index(x, y + 1)]});
+        }
+      const std::size_t ne = edges.size();
+      for (std::size_t i = 0; i < ne; ++i) edges.push_back({edges[i].second, edges[i].first});
+      std::sort(edges.begin(), edges.end());
+      edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+      std::vector<int> first_edge(g.num_groups + 1, 0);
+      for (const auto& e : edges) ++first_edge[e.first + 1];
+      for (int gi = 0; gi < g.num_groups; ++gi) first_edge[gi + 1] += first_edge[gi];
+      std::deque<int> queue;
+      for (int gi = 0; gi < g.num_groups; ++gi)
+        if (done[gi]) queue.push_back(gi);
+      for (int root = 0; root < g.num_groups; ++root) {
+        if (queue.empty()) {
+          if (done[root] || reps[l][root] < 0 || isochart::norm(group_dir[root]) < 1e-12) continue;
+          done[root] = 1;
+          queue.push_back(root);
+        }
+        while (!queue.empty()) {
+          const int gi = queue.front();
+          queue.pop_front();
+          for (int k = first_edge[gi]; k < first_edge[gi + 1]; ++k) {
+            const int h = edges[k].second;
+            if (done[h] || reps[l][h] < 0 || isochart::norm(group_dir[h]) < 1e-12) continue;
+            group_dir[h] = rep_of(h, group_dir[gi]);
+            done[h] = 1;
+            queue.push_back(h);
+          }
+        }
+      }
+    }
+  }
+  std::vector<LevelGeometry> geo;
   geo.reserve(nl);
   for (int l = 0; l < nl; ++l) {
     const mcgim::GeometryImage& g = pyramid[l].image;
-    const int n = g.width * g.height;
-    std::vector<Vec3d> dir(n, Vec3d{0, 0, 0}), group_dir(g.num_groups, Vec3d{0, 0, 0});
-    reps[l].assign(g.num_groups, -1);
-    for (int s = 0; s < n; ++s) {
-      if (!g.defined(s)) continue;
-      const int f = g.face[s];
-      Vec3d d{0, 0, 0};
-      if (f >= 0 && f < atlas.num_faces())
-        for (int k = 0; k < 3; ++k) d = d + field[atlas.faces[f][k]] * g.barycentric[s][k];
-      group_dir[g.group[s]] = group_dir[g.group[s]] + d;
-      if (reps[l][g.group[s]] < 0) reps[l][g.group[s]] = s;
-    }
-    for (int s = 0; s < n; ++s)
-      if (g.defined(s)) dir[s] = group_dir[g.group[s]];
+    std::vector<Vec3d> dir(static_cast<std::size_t>(g.width) * g.height, Vec3d{0, 0, 0});
+    for (int s = 0; s < g.width * g.height; ++s)
+      if (g.defined(s)) dir[s] = level_dirs[l][g.group[s]];
     geo.emplace_back(pyramid[l], dir);
   }
   isochart::report(progress, isochart::Stage::Synthesis, 0.05);
 
-  const int n = o.neighborhood, nc = o.coarse_neighborhood;
   res.group_colors.resize(nl);
   res.levels.resize(nl);
-  // Levels too small for a neighbourhood to fit in their charts only add noise: synthesis
-  // starts at the coarsest level with enough samples (the finest one at the latest).
-  int top = 0;
-  while (top + 1 < nl && pyramid[top + 1].image.num_groups >= o.min_level_samples) ++top;
   for (int l = top + 1; l < nl; ++l) {
     res.levels[l].width = pyramid[l].image.width;
     res.levels[l].height = pyramid[l].image.height;

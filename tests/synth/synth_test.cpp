@@ -244,7 +244,12 @@ TEST_CASE("isocharts synth writes textured meshes and its report", "[synth][cli]
   REQUIRE(tmp.run("synth builtin:sphere --levels 48,24 --atlas-size 128 --json -o " + tmp / "s.glb") == 0);
   std::ifstream in(tmp / "stdout.txt");
   const nlohmann::json j = nlohmann::json::parse(in);
-  for (const char* key : {"seam_error", "match_error", "texel_scale_spread", "seconds"}) CHECK(j.contains(key));
+  for (const char* key : {"seam_error", "match_error", "texel_scale_spread", "seconds", "start_level",
+                          "correlation_length", "coarse_footprint", "smoothness", "direction_symmetry"})
+    CHECK(j.contains(key));
+  // The default exemplar (procedural bricks: rows across the image) starts at the finest level.
+  CHECK(j["start_level"] == 0);
+  CHECK(j["direction_symmetry"] == 2);
   for (const char* f : {"s.glb", "s.obj", "s.mtl", "s.png", "s_mcgim.glb", "s_mcgim.obj", "s_mcgim.png"})
     CHECK(fs::exists(tmp / f));
   const Image tex = isochart::read_image(tmp / "s.png");
@@ -327,7 +332,150 @@ TEST_CASE("synthesis copies coherent exemplar patches", "[synth]") {
   CHECK(r.levels[1].groups == 0);
   CHECK(r.group_colors[1].empty());
   so.min_level_samples = 1;
+  so.start_level = 1;
   const synth::SynthResult all = synth::synthesize(atlas, pyramid, synth::make_exemplar("bricks", 64), so);
   CHECK(all.levels[1].groups > 0);
   CHECK(all.group_colors[1].size() == static_cast<std::size_t>(pyramid[1].image.num_groups));
+}
+
+TEST_CASE("correlation length measures how far the exemplar's structure reaches", "[synth]") {
+  // A checkerboard of 4-pixel squares: along x the normalized autocorrelation is about
+  // 1 − k/2 (0.49 at k = 1, 0.03 at k = 2), along a diagonal its square: first ≤ 0.1 at
+  // k = 2 on every axis, i.e. 2√2 pixels on the diagonals.
+  Image checker(64, 64, 3);
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) checker.at(x, y, c) = ((x / 4 + y / 4) % 2) ? 0.9f : 0.1f;
+  CHECK(synth::correlation_length(checker) == Approx(2 * std::sqrt(2.0)));
+  CHECK(synth::correlation_length(checker, 0.6) == Approx(std::sqrt(2.0)));
+  const auto axes = synth::correlation_lengths(checker);
+  CHECK(axes[0] == 2.0);
+  CHECK(axes[1] == 2.0);
+  CHECK(axes[3] == Approx(2 * std::sqrt(2.0)));
+  // Horizontal stripes never decorrelate along x: half the exemplar.
+  Image stripes(64, 48, 3);
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) stripes.at(x, y, c) = (y / 3) % 2 ? 0.8f : 0.2f;
+  CHECK(synth::correlation_length(stripes) == Approx(24.0));
+  CHECK(synth::correlation_length(Image(16, 16, 3, 0.5f)) == 0.0);
+  // The procedural exemplars: rows of bricks reach across, cells and noise do not.
+  CHECK(synth::correlation_length(synth::make_exemplar("bricks", 64)) >
+        3 * synth::correlation_length(synth::make_exemplar("cells", 64)));
+}
+
+TEST_CASE("the automatic start level follows the exemplar's correlation length and smoothness", "[synth]") {
+  const isochart::Mesh atlas = mcgim_test::cube_atlas(6);
+  const auto pyramid = cube_pyramid(atlas, {{48, 48}, {24, 24}});
+  synth::SynthOptions so;
+  so.scale = 16;
+  so.min_level_samples = 1;  // both levels allowed
+  // Smooth blobs (period 40 pixels), sharp 4-pixel checks, horizontal stripes.
+  Image blobs(80, 80, 3), checker(64, 64, 3), stripes(64, 64, 3);
+  for (int y = 0; y < 80; ++y)
+    for (int x = 0; x < 80; ++x)
+      for (int c = 0; c < 3; ++c)
+        blobs.at(x, y, c) = static_cast<float>(0.5 + 0.4 * std::sin(2 * M_PI * (x + 0.5) / 40) *
+                                                         std::sin(2 * M_PI * (y + 0.5) / 40));
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      for (int c = 0; c < 3; ++c) {
+        checker.at(x, y, c) = ((x / 4 + y / 4) % 2) ? 0.9f : 0.1f;
+        stripes.at(x, y, c) = (y / 3) % 2 ? 0.8f : 0.2f;
+      }
+  const synth::SynthResult a = synth::synthesize(atlas, pyramid, blobs, so);
+  const synth::SynthResult b = synth::synthesize(atlas, pyramid, stripes, so);
+  const synth::SynthResult c = synth::synthesize(atlas, pyramid, checker, so);
+  // One finest texel is about 2.7 exemplar pixels here; the 24² level's 5×5 footprint is
+  // 5·16·0.33 ≈ 27 pixels. The blobs are smooth at 3 pixels (cos(2π·3/40) ≈ 0.89) and
+  // decorrelate within about 11: start at 24².
+  CHECK(a.smoothness > 0.85);
+  CHECK(a.correlation_length < a.coarse_footprint);
+  REQUIRE(a.start_level == 1);
+  CHECK(a.levels[1].groups > 0);
+  CHECK(a.coarse_footprint == Approx(5 * a.levels[1].exemplar_factor));
+  // The stripes stay correlated along x for 32 pixels, beyond the footprint: start at 48².
+  CHECK(b.correlation_length == Approx(32.0));
+  CHECK(b.start_level == 0);
+  CHECK(b.levels[1].groups == 0);
+  CHECK(b.group_colors[1].empty());
+  // The footprint compared is the 24² level's, though synthesis then starts at 48².
+  CHECK(b.coarse_footprint == Approx(5 * 16 * pyramid[1].stats.texel_size).epsilon(0.1));
+  CHECK(b.coarse_footprint < b.correlation_length);
+  // The checks decorrelate within 3 pixels but are sharp at the texel: start at 48².
+  CHECK(c.correlation_length == Approx(2 * std::sqrt(2.0)));
+  CHECK(c.smoothness < 0.85);
+  CHECK(c.start_level == 0);
+  // Automatic field symmetry: blobs and checks decorrelate alike along x and y (4-fold), the
+  // stripes do not (2-fold).
+  CHECK(a.direction_symmetry == 4);
+  CHECK(c.direction_symmetry == 4);
+  CHECK(b.direction_symmetry == 2);
+  // An explicit start level overrides the rule.
+  so.start_level = 1;
+  CHECK(synth::synthesize(atlas, pyramid, stripes, so).start_level == 1);
+  CHECK(synth::exemplar_smoothness(Image(8, 8, 3, 0.3f)) == 1.0);
+  // 63 pixel pairs per row, 15 of them across a check edge: (63 − 2·15) / 63.
+  CHECK(synth::exemplar_smoothness(checker, 1) == Approx(33.0 / 63));
+}
+
+TEST_CASE("an N-symmetric direction field is smoother modulo 360/N degrees", "[synth]") {
+  // On a cube a 4-direction field can follow the edges everywhere; a vector field cannot.
+  const isochart::Mesh cube = mcgim_test::cube_atlas(6);
+  const isochart::Topology topo(cube);
+  const auto normals = isochart::vertex_normals(cube);
+  // Mean over edges of 1 − cos(N·φ), φ the angle between the two ends' directions after
+  // projecting the neighbour into the vertex's tangent plane.
+  auto roughness = [&](const std::vector<Vec3d>& d, int sym) {
+    double sum = 0;
+    long long count = 0;
+    for (int i = 0; i < cube.num_vertices(); ++i) {
+      const Vec3d b = isochart::cross(normals[i], d[i]);
+      for (int j : topo.vertex_neighbors(i)) {
+        const Vec3d p = d[j] - normals[i] * isochart::dot(d[j], normals[i]);
+        if (isochart::norm(p) < 1e-9) continue;
+        sum += 1 - std::cos(sym * std::atan2(isochart::dot(p, b), isochart::dot(p, d[i])));
+        ++count;
+      }
+    }
+    return sum / std::max<long long>(1, count);
+  };
+  const auto d1 = synth::direction_field(cube, {0, 0, 0}, 200, 1);
+  const auto d4 = synth::direction_field(cube, {0, 0, 0}, 200, 4);
+  REQUIRE(d4.size() == static_cast<std::size_t>(cube.num_vertices()));
+  for (int i = 0; i < cube.num_vertices(); ++i) {
+    CHECK(isochart::norm(d4[i]) == Approx(1.0));
+    CHECK(std::fabs(isochart::dot(d4[i], normals[i])) < 1e-9);
+  }
+  CHECK(roughness(d4, 4) < 0.5 * roughness(d1, 4));
+  CHECK_THROWS_AS(synth::direction_field(cube, {0, 0, 0}, 10, 0), isochart::InputError);
+}
+
+TEST_CASE("synthesis with a 2- and 4-direction field is deterministic and seamless", "[synth]") {
+  const isochart::Mesh atlas = mcgim_test::cube_atlas(6);
+  const auto pyramid = cube_pyramid(atlas, {{48, 48}, {24, 24}});
+  const Image ex = synth::make_exemplar("weave", 64);
+  for (int sym : {2, 4}) {
+    synth::SynthOptions so;
+    so.scale = 32;
+    so.direction_symmetry = sym;
+    so.min_level_samples = 1;
+    so.start_level = 1;
+    synth::SynthResult a, b;
+    {
+      tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+      a = synth::synthesize(atlas, pyramid, ex, so);
+    }
+    {
+      tbb::global_control two(tbb::global_control::max_allowed_parallelism, 2);
+      b = synth::synthesize(atlas, pyramid, ex, so);
+    }
+    CHECK(a.texture.pixels == b.texture.pixels);
+    CHECK(a.match_error < 1.0);
+    CHECK(a.seam_error > 0.0);
+    CHECK(a.seam_error < 1.6);
+  }
+  synth::SynthOptions bad;
+  bad.direction_symmetry = -1;
+  CHECK_THROWS_AS(synth::synthesize(atlas, pyramid, ex, bad), isochart::InputError);
 }

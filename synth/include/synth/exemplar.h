@@ -3,6 +3,7 @@
 /// texel size of each MCGIM level (the exemplar's Gaussian pyramid, Wei–Levoy 2001 §3), and the
 /// project's own procedural exemplars.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -35,6 +36,26 @@ ExemplarLevel resample_exemplar(const isochart::Image& rgb, double factor);
 /// Builds one ExemplarLevel per factor (MCGIM levels finest first: increasing factors).
 std::vector<ExemplarLevel> exemplar_pyramid(const isochart::Image& rgb,
                                             const std::vector<double>& factors);
+
+/// Correlation length of an exemplar (original pixels): along x, y and both diagonals, the
+/// first lag at which the normalized autocorrelation of the colours (mean removed, channels
+/// summed) falls to `threshold` or below; the longest of the four. Lags stop at half the
+/// exemplar's smaller side (that value is returned when the correlation never falls). It
+/// measures how far the exemplar's structure reaches: a few pixels for cells or gravel, the
+/// whole row for the bricks photograph (mortar lines run across the image). Large exemplars
+/// are sampled on a regular sub-grid of at most about 256² pixels per lag.
+double correlation_length(const isochart::Image& rgb, double threshold = 0.1);
+/// The four lengths correlation_length takes the longest of: along x, y, the diagonal (+x +y)
+/// and the anti-diagonal (+x −y), in original pixels.
+std::array<double, 4> correlation_lengths(const isochart::Image& rgb, double threshold = 0.1);
+
+/// Smoothness of an exemplar at `lag` pixels (rounded, at least 1): the smaller of its
+/// normalized colour autocorrelations at that lag along x and along y (1 for a constant
+/// image). Near 1 when the exemplar varies little from one pixel to the next at that scale
+/// (the cells exemplar: 0.92 at one pixel); low when thin lines, edges or grain carry much of
+/// its variance (bricks, gravel, wicker photographs: 0.53–0.68), detail a coarser pyramid
+/// level blurs away.
+double exemplar_smoothness(const isochart::Image& rgb, double lag = 1);
 
 /// Names of the procedural exemplars: "bricks", "cells", "weave", "noise".
 std::vector<std::string> exemplar_names();

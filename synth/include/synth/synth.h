@@ -1,14 +1,16 @@
 #pragma once
 /// Surface texture synthesis over an MCGIM pyramid (Iso-charts §8; Wei & Levoy 2001):
 /// neighbourhoods are gathered in each chart's 2-D image domain, rotated and scaled by a smooth
-/// tangent direction field, and cross chart seams by walking over the surface into the
-/// neighbour chart. The first synthesized level (the coarsest with enough samples, see
-/// SynthOptions::min_level_samples) starts from an exemplar copy grown over the surface along
-/// the field, continued across seams, then gets non-causal passes; each finer level starts from its coarser level's exemplar coordinates carried through the
-/// normal-shooting correspondence (coordinate upsampling), then gets non-causal passes in a
-/// random order over neighbourhoods of the current and the coarser level. Candidates are
-/// Ashikhmin coherent candidates with their k-coherence sets (Tong et al. 2002) plus a few from
-/// FLANN kd-trees on PCA-reduced neighbourhoods, re-ranked exactly with a coherence bias.
+/// tangent direction field (by default an N-direction field, N = 2 or 4 from the exemplar),
+/// and cross chart seams by walking over the surface into the neighbour chart. The first
+/// synthesized level (chosen from the exemplar's correlation length and smoothness, see
+/// SynthOptions::start_level) starts from an exemplar copy grown over the surface along the
+/// field, continued across seams, then gets non-causal passes; each finer level starts from its
+/// coarser level's exemplar coordinates carried through the normal-shooting correspondence
+/// (coordinate upsampling), then gets non-causal passes in a random order over neighbourhoods
+/// of the current and the coarser level. Candidates are Ashikhmin coherent candidates with
+/// their k-coherence sets (Tong et al. 2002) plus a few from FLANN kd-trees on PCA-reduced
+/// neighbourhoods, re-ranked exactly with a coherence bias.
 
 #include <array>
 #include <cstdint>
@@ -49,23 +51,47 @@ struct SynthOptions {
   /// Size of the k-coherence sets (Tong et al. 2002): per exemplar pixel, its most similar
   /// neighbourhoods elsewhere, tried shifted like the coherent candidates. 0: coherent only.
   int k_coherence = 2;
-  /// Synthesis starts at the coarsest level with at least this many samples (zipper groups);
-  /// the finest level is always synthesized. On levels of a few hundred samples most
-  /// neighbourhood taps cross seams or leave the mesh and only add noise (bunny's 32² level:
-  /// 366 samples). Measured on bunny and horse at 256² (bench/README.md): from 64² (the
-  /// default) stochastic exemplars such as cells keep round cells of even size; an exemplar
-  /// with thin structure (the bricks photograph) keeps legible rows only when synthesis starts
-  /// at the finest level (20000 here: the field-following copy, then coherent passes), where
-  /// cells come out streaked.
+  /// Levels with fewer samples (zipper groups) than this are never synthesized (the finest
+  /// level always is): on levels of a few hundred samples most neighbourhood taps cross seams
+  /// or leave the mesh and only add noise (bunny's 32² level: 366 samples).
   int min_level_samples = 1000;
+  /// Where synthesis starts. −1 (automatic): at the coarsest level allowed by
+  /// `min_level_samples` when (a) its neighbourhood footprint (`neighborhood` texels, in
+  /// original exemplar pixels) covers the exemplar's correlation length (see
+  /// correlation_length), so that its neighbourhoods see the exemplar's structure, and (b) the
+  /// exemplar is smooth at the finest texel (exemplar_smoothness at one finest texel ≥
+  /// `smoothness_threshold`), so that a coarse level keeps what makes it up; otherwise at the
+  /// finest level, from the exemplar copy grown along the field, which keeps structure that
+  /// coarse neighbourhoods cannot see or that coarse levels blur away. Measured on bunny and
+  /// horse at 256² with one exemplar pixel per finest texel (bench/README.md): the cells
+  /// exemplar (smoothness 0.92, correlation 5.7 pixels) starts at 64², where cells stay round
+  /// and even (from 256² they come out streaked and merged); the bricks (mortar lines across
+  /// the image: correlation 45 pixels), gravel and wicker photographs (smoothness ≤ 0.68)
+  /// start at 256², where rows, stones and strands stay crisp (from 64² gravel comes out as
+  /// flat olive patches and brick rows as fragments).
+  /// ≥ 0: start at that pyramid index (clamped to the levels allowed by `min_level_samples`).
+  int start_level = -1;
+  /// Correlation threshold of the automatic start (see correlation_length).
+  double correlation_threshold = 0.1;
+  /// Smoothness the automatic start needs to begin at a coarse level (see start_level).
+  double smoothness_threshold = 0.85;
   int candidates = 8;       ///< FLANN candidates re-ranked exactly
   int pca_dims = 12;        ///< PCA dimensions of the kd-trees (more: better candidates, slower)
   int relax_iterations = 200;///< smoothing sweeps of the computed direction field
+  /// Rotational symmetry N of the computed direction field. 1: a vector field (the x axis
+  /// projected and relaxed, see direction_field). N > 1: the globally smoothest N-direction
+  /// field (directions equal up to multiples of 360°/N), whose singularities have index k/N
+  /// instead of whole turns, with one representative per sample chosen to vary continuously
+  /// within and across charts and levels. 0: automatic, see SynthResult::direction_symmetry.
+  int direction_symmetry = 0;
+  /// Automatic symmetry: 4 when the exemplar's correlation lengths along x and y (see
+  /// correlation_lengths) differ by at most this factor, otherwise 2.
+  double symmetry_ratio = 1.5;
   std::uint64_t seed = 1;   ///< every random choice; output independent of the thread count
 };
 
 /// Per-level figures. Seconds are wall time. Levels coarser than the first synthesized one
-/// (see SynthOptions::min_level_samples) have only their size and texel size set.
+/// (see SynthOptions::start_level) have only their size and texel size set.
 struct SynthLevelStats {
   int width = 0, height = 0;
   int exemplar_width = 0, exemplar_height = 0;  ///< exemplar pyramid level
@@ -88,6 +114,16 @@ struct SynthResult {
   /// finest exemplar level its colour was copied from, −1 when none (a sample without data).
   std::vector<int> exemplar_pixels;
   double scale = 0;  ///< exemplar pixels per unit of surface length actually used
+  int start_level = 0;  ///< pyramid index synthesis started at (see SynthOptions::start_level)
+  /// Symmetry N of the direction field used (see SynthOptions::direction_symmetry).
+  int direction_symmetry = 1;
+  /// What the automatic start compared (see SynthOptions::start_level): the exemplar's
+  /// correlation length and the neighbourhood footprint of the coarsest level allowed by
+  /// SynthOptions::min_level_samples, both in original exemplar pixels.
+  double correlation_length = 0;
+  double coarse_footprint = 0;
+  /// exemplar_smoothness at one finest texel, which the automatic start compared too.
+  double smoothness = 0;
   /// Mean over finest-level samples of the squared distance between the final neighbourhood
   /// and its best exemplar match, per valid component, divided by the exemplar's variance
   /// (0 = every neighbourhood occurs in the exemplar; about 2 for unrelated noise).
@@ -117,10 +153,15 @@ isochart::Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Leve
                                   const isochart::Image& texture, int size);
 
 /// Per-vertex unit tangent directions of `mesh`: `direction` (or the x axis when zero, the
-/// y axis where x is nearly normal) projected into each tangent plane; when `direction` is
-/// zero, then relaxed by `iterations` sweeps of neighbour averaging.
+/// y axis where x is nearly normal) projected into each tangent plane. When `direction` is
+/// zero: with `symmetry` 1, then relaxed by `iterations` sweeps of neighbour averaging; with
+/// N = `symmetry` > 1, one representative per vertex of the globally smoothest N-direction
+/// field (Knöppel et al. 2013: the smallest eigenvector of the N-fold connection Laplacian,
+/// by inverse iteration from the projected axis, min(40, max(5, iterations/10)) steps).
+/// \throw isochart::InputError when symmetry < 1.
 std::vector<isochart::Vec3d> direction_field(const isochart::Mesh& mesh,
-                                             const isochart::Vec3d& direction, int iterations);
+                                             const isochart::Vec3d& direction, int iterations,
+                                             int symmetry = 1);
 
 /// A neighbourhood tap: a weighted mix of up to four samples of one level (weights sum to 1),
 /// or missing (all weights 0) when it falls off the mesh boundary.
