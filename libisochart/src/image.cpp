@@ -1,8 +1,8 @@
-// Image files through OpenImageIO. OIIO keeps per-thread and global error strings; every
-// failure path reads them (which also clears them, so OIIO does not complain at exit).
+// Image files: checks, temporary files and renames here; the format work in the OpenImageIO
+// module (image_module.h), loaded the first time an image is read or written.
 #include "isochart/image.h"
 
-#include <OpenImageIO/imageio.h>
+#include <dlfcn.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -10,9 +10,12 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <system_error>
 
+#include "image_module.h"
 #include "isochart/error.h"
 
 namespace isochart {
@@ -30,19 +33,52 @@ std::string lower_extension(const std::string& path) {
   return ext;
 }
 
-// One line from OIIO's error text: the first non-empty line.
-std::string one_line(std::string message) {
-  const auto start = message.find_first_not_of(" \t\r\n");
-  if (start == std::string::npos) return {};
-  message = message.substr(start);
-  const auto end = message.find_first_of("\r\n");
-  if (end != std::string::npos) message.resize(end);
-  return message;
+#ifndef ISOCHARTS_IMAGE_MODULE_PATH
+#define ISOCHARTS_IMAGE_MODULE_PATH ""
+#endif
+
+constexpr const char* kModuleName = "libisocharts_imageio.so";
+
+const IsochartsImageModule* try_load(const std::string& file, std::string& errors) {
+  void* handle = ::dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (!handle) {
+    const char* e = ::dlerror();
+    errors += std::string(errors.empty() ? "" : "; ") + (e ? e : file + ": cannot load");
+    return nullptr;
+  }
+  auto entry = reinterpret_cast<IsochartsImageModuleEntry>(::dlsym(handle, "isocharts_image_module"));
+  const IsochartsImageModule* m = entry ? entry() : nullptr;
+  if (!m || m->abi != ISOCHARTS_IMAGE_MODULE_ABI) {
+    errors +=
+        std::string(errors.empty() ? "" : "; ") + file + ": not an isocharts image module of this version";
+    ::dlclose(handle);
+    return nullptr;
+  }
+  return m;  // kept loaded for the life of the process
 }
 
-std::string with_detail(const std::string& message, const std::string& detail) {
-  const std::string d = one_line(detail);
-  return d.empty() ? message : message + " (" + d + ")";
+const IsochartsImageModule* load_module() {
+  std::vector<std::string> candidates;
+  if (const char* env = std::getenv("ISOCHARTS_IMAGE_MODULE"); env && *env) candidates.emplace_back(env);
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) candidates.push_back((exe.parent_path() / kModuleName).string());
+  if (*ISOCHARTS_IMAGE_MODULE_PATH) candidates.emplace_back(ISOCHARTS_IMAGE_MODULE_PATH);
+  std::string errors;
+  for (const std::string& c : candidates) {
+    if (!fs::exists(c, ec)) continue;
+    if (const IsochartsImageModule* m = try_load(c, errors)) return m;
+  }
+  throw Error(std::string("image I/O is unavailable: ") + kModuleName + " " +
+              (errors.empty()
+                   ? "was not found next to the program or in the build tree (set ISOCHARTS_IMAGE_MODULE)"
+                   : "could not be loaded (" + errors + ")"));
+}
+
+const IsochartsImageModule& image_module() {
+  // A failed load throws and is retried by the next call.
+  static const IsochartsImageModule* module = load_module();
+  return *module;
 }
 
 int wrap_index(int i, int n, Wrap wrap) {
@@ -85,38 +121,29 @@ Image read_image(const std::string& path) {
   if (!fs::exists(path, ec)) throw InputError(path, "image file not found");
   if (fs::is_directory(path, ec)) throw InputError(path, "is a directory, not an image file");
 
-  // Keep alpha as stored (straight): OIIO would otherwise premultiply PNG colours by alpha.
-  OIIO::ImageSpec config;
-  config.attribute("oiio:UnassociatedAlpha", 1);
-  auto in = OIIO::ImageInput::open(path, &config);
-  if (!in)
-    throw InputError(path,
-                     with_detail("cannot read image: unknown format or unreadable file", OIIO::geterror()));
-  const OIIO::ImageSpec& spec = in->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
-    in->geterror();
-    throw InputError(path, "image has no pixels (" + std::to_string(spec.width) + "x" +
-                               std::to_string(spec.height) + ", " + std::to_string(spec.nchannels) +
-                               " channels)");
+  const IsochartsImageModule& m = image_module();
+  Image image;
+  float* data = nullptr;
+  char names[4096] = {0};
+  char message[1024] = {0};
+  const int status = m.read(path.c_str(), kMaxImageValues, &image.width, &image.height, &image.channels,
+                            &data, names, sizeof names, message, sizeof message);
+  if (status == kIsochartsImageInputError) throw InputError(path, message);
+  if (status != kIsochartsImageOk) throw Error("cannot read image " + path + ": " + message);
+  const std::size_t n = static_cast<std::size_t>(image.width) * image.height * image.channels;
+  try {
+    image.pixels.assign(data, data + n);
+  } catch (...) {
+    m.free_pixels(data);
+    throw;
   }
-  if (spec.depth > 1) throw InputError(path, "volume images are not supported");
-  const long long values = static_cast<long long>(spec.width) * spec.height * spec.nchannels;
-  if (values > kMaxImageValues)
-    throw InputError(path, "image too large (" + std::to_string(spec.width) + "x" +
-                               std::to_string(spec.height) + "x" + std::to_string(spec.nchannels) + ")");
-
-  Image image(spec.width, spec.height, spec.nchannels);
-  const bool ok = in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data());
-  if (!ok) {
-    const std::string detail = in->geterror();
-    OIIO::geterror();
-    throw InputError(path, with_detail("cannot read image: corrupt or truncated file", detail));
+  m.free_pixels(data);
+  for (const char* p = names; *p;) {
+    const char* e = std::strchr(p, '\n');
+    if (!e) break;
+    image.channel_names.emplace_back(p, e);
+    p = e + 1;
   }
-  in->close();
-  // Some readers leave warnings behind even on success; drop them.
-  in->geterror();
-  for (float& x : image.pixels)
-    if (!std::isfinite(x)) x = 0.0f;
   return image;
 }
 
@@ -133,42 +160,47 @@ void write_image(const std::string& path, const Image& image) {
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw InputError(path, "output directory does not exist");
+  const IsochartsImageModule& m = image_module();
 
-  // Same directory (so the rename is atomic), same extension (so OIIO picks the format),
-  // unique per process and call.
+  // Same directory (so the rename is atomic), same extension (so the writer picks the
+  // format), unique per process and call.
   static std::atomic<unsigned> counter{0};
   const fs::path tmp = dir / ("." + target.stem().string() + ".tmp" + std::to_string(::getpid()) + "-" +
                               std::to_string(counter++) + target.extension().string());
 
-  auto out = OIIO::ImageOutput::create(tmp.string());
-  if (!out) {
-    OIIO::geterror();  // names the temporary file; ours is clearer
-    throw InputError(path, "unsupported image format '" + ext + "' (use .png, .jpg, .exr, .tif, ...)");
-  }
-
   const bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".pfm";
   int channels = image.channels;
+  const bool named = static_cast<int>(image.channel_names.size()) == image.channels;
   // JPEG has no alpha; keep colour (or grey) only.
-  if ((ext == ".jpg" || ext == ".jpeg") && (channels == 2 || channels == 4)) --channels;
-  OIIO::ImageSpec spec(image.width, image.height, channels,
-                       is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-  if (channels == 4 || channels == 2) {
-    spec.alpha_channel = channels - 1;
-    // Our pixels have straight alpha; without this the writer would divide colours by alpha.
-    spec.attribute("oiio:UnassociatedAlpha", 1);
+  if (!named && (ext == ".jpg" || ext == ".jpeg") && (channels == 2 || channels == 4)) --channels;
+  int alpha = -1;
+  std::string names;
+  if (named) {
+    for (int c = 0; c < channels; ++c) {
+      names += image.channel_names[c] + "\n";
+      if (image.channel_names[c] == "A") alpha = c;
+    }
+  } else if (channels == 4 || channels == 2) {
+    alpha = channels - 1;
   }
+  std::vector<const char*> attributes;
+  for (const auto& [key, value] : image.attributes) {
+    attributes.push_back(key.c_str());
+    attributes.push_back(value.c_str());
+  }
+  attributes.push_back(nullptr);
 
-  auto fail = [&](const std::string& detail) {
-    out.reset();
+  char message[1024] = {0};
+  const int status = m.write(tmp.c_str(), image.width, image.height, channels, image.channels,
+                             image.pixels.data(), is_float ? 1 : 0, alpha, named ? names.c_str() : nullptr,
+                             attributes.data(), message, sizeof message);
+  if (status == kIsochartsImageUnsupported)
+    throw InputError(path, "unsupported image format '" + ext + "' (use .png, .jpg, .exr, .tif, ...)");
+  if (status != kIsochartsImageOk) {
     fs::remove(tmp, ec);
-    OIIO::geterror();
-    throw Error(with_detail("cannot write image " + path, detail));
-  };
-  if (!out->open(tmp.string(), spec)) fail(out->geterror());
-  const auto xstride = static_cast<OIIO::stride_t>(sizeof(float)) * image.channels;
-  if (!out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data(), xstride)) fail(out->geterror());
-  if (!out->close()) fail(out->geterror());
-  out.reset();
+    throw Error(message[0] ? "cannot write image " + path + " (" + message + ")"
+                           : "cannot write image " + path);
+  }
   fs::rename(tmp, target, ec);
   if (ec) {
     const std::string reason = ec.message();

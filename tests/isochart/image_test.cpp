@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
@@ -87,6 +88,27 @@ TEST_CASE("EXR round trip keeps float values exactly", "[image]") {
   REQUIRE(b.height == 3);
   REQUIRE(b.channels == 3);
   CHECK(a.pixels == b.pixels);
+}
+
+TEST_CASE("named channels and attributes reach the file", "[image]") {
+  TempDir dir;
+  Image a(3, 2, 5);
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) a.pixels[i] = static_cast<float>(i) - 4.0f;
+  a.channel_names = {"R", "G", "B", "mask", "id"};
+  a.attributes = {{"compression", "zip"}, {"isocharts:kind", "test"}};
+  write_image(dir.file("named.exr"), a);
+  const Image b = read_image(dir.file("named.exr"));
+  REQUIRE(b.channels == 5);
+  REQUIRE(b.channel_names.size() == 5);
+  // EXR stores channels sorted by name; every value must come back under its own name.
+  for (int c = 0; c < 5; ++c) {
+    const auto it = std::find(b.channel_names.begin(), b.channel_names.end(), a.channel_names[c]);
+    REQUIRE(it != b.channel_names.end());
+    const int bc = static_cast<int>(it - b.channel_names.begin());
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 3; ++x) CHECK(b.at(x, y, bc) == a.at(x, y, c));
+  }
+  CHECK(dir.entries() == 1);
 }
 
 TEST_CASE("JPEG output drops alpha", "[image]") {

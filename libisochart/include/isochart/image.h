@@ -1,7 +1,11 @@
 #pragma once
 /// Float images and their file I/O through OpenImageIO (PNG, JPG, EXR, TIFF, ... by extension).
+/// The I/O runs in a module, libisocharts_imageio.so, loaded on the first read or write (see
+/// src/image_module.h for why); it is looked for at $ISOCHARTS_IMAGE_MODULE, next to the running
+/// program, then where the build put it.
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace isochart {
@@ -16,6 +20,11 @@ struct Image {
   int height = 0;
   int channels = 0;
   std::vector<float> pixels;  ///< width × height × channels values
+  /// Optional channel names (as stored in the file; EXR keeps them sorted). Written when there
+  /// is one per channel, and then no channel is taken for alpha unless it is named "A".
+  std::vector<std::string> channel_names;
+  /// Optional string metadata written with the image (key, value), e.g. {"compression", "zip"}.
+  std::vector<std::pair<std::string, std::string>> attributes;
 
   Image() = default;
   /// An image filled with `value` in every channel.
@@ -40,8 +49,9 @@ enum class Wrap { Clamp, Repeat };
 void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wrap = Wrap::Clamp);
 
 /// Reads the first subimage of an image file; 8-bit and 16-bit data are scaled to [0, 1].
+/// Fills `channel_names`.
 /// \throw InputError(path, ...) when the file is missing, unreadable, corrupt or in a format
-///        OpenImageIO does not know.
+///        OpenImageIO does not know; Error when the image I/O module cannot be loaded.
 Image read_image(const std::string& path);
 
 /// Writes `image` to `path` in the format given by the extension: float for .exr/.hdr/.pfm,

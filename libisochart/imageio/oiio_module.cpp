@@ -1,0 +1,168 @@
+// The image I/O module (libisocharts_imageio.so): image files through OpenImageIO, behind the
+// plain-C interface of image_module.h. libisochart loads it on the first image read or write.
+//
+// OIIO keeps per-thread and global error strings; every failure path reads them (which also
+// clears them, so OIIO does not complain at exit).
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <new>
+#include <string>
+
+#include "../src/image_module.h"
+
+namespace {
+
+// One line from OIIO's error text: the first non-empty line.
+std::string one_line(std::string message) {
+  const auto start = message.find_first_not_of(" \t\r\n");
+  if (start == std::string::npos) return {};
+  message = message.substr(start);
+  const auto end = message.find_first_of("\r\n");
+  if (end != std::string::npos) message.resize(end);
+  return message;
+}
+
+std::string with_detail(const std::string& message, const std::string& detail) {
+  const std::string d = one_line(detail);
+  return d.empty() ? message : message + " (" + d + ")";
+}
+
+int report(int status, const std::string& text, char* message, std::size_t size) {
+  if (message && size > 0) {
+    std::strncpy(message, text.c_str(), size - 1);
+    message[size - 1] = '\0';
+  }
+  return status;
+}
+
+int read_file(const char* path, long long max_values, int* width, int* height, int* channels, float** pixels,
+              char* names, std::size_t names_size, char* message, std::size_t message_size) {
+  *pixels = nullptr;
+  // Keep alpha as stored (straight): OIIO would otherwise premultiply PNG colours by alpha.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(path, &config);
+  if (!in)
+    return report(kIsochartsImageInputError,
+                  with_detail("cannot read image: unknown format or unreadable file", OIIO::geterror()),
+                  message, message_size);
+  const OIIO::ImageSpec& spec = in->spec();
+  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) {
+    in->geterror();
+    return report(kIsochartsImageInputError,
+                  "image has no pixels (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                      ", " + std::to_string(spec.nchannels) + " channels)",
+                  message, message_size);
+  }
+  if (spec.depth > 1)
+    return report(kIsochartsImageInputError, "volume images are not supported", message, message_size);
+  const long long values = static_cast<long long>(spec.width) * spec.height * spec.nchannels;
+  if (values > max_values)
+    return report(kIsochartsImageInputError,
+                  "image too large (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) + "x" +
+                      std::to_string(spec.nchannels) + ")",
+                  message, message_size);
+  auto* data = static_cast<float*>(std::malloc(static_cast<std::size_t>(values) * sizeof(float)));
+  if (!data) return report(kIsochartsImageError, "out of memory reading the image", message, message_size);
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, data)) {
+    const std::string detail = in->geterror();
+    OIIO::geterror();
+    std::free(data);
+    return report(kIsochartsImageInputError,
+                  with_detail("cannot read image: corrupt or truncated file", detail), message, message_size);
+  }
+  in->close();
+  // Some readers leave warnings behind even on success; drop them.
+  in->geterror();
+  for (long long i = 0; i < values; ++i)
+    if (!std::isfinite(data[i])) data[i] = 0.0f;
+  std::string joined;
+  for (int c = 0; c < spec.nchannels; ++c)
+    joined += (c < static_cast<int>(spec.channelnames.size()) ? spec.channelnames[c] : std::string()) + "\n";
+  report(0, joined, names, names_size);
+  *width = spec.width;
+  *height = spec.height;
+  *channels = spec.nchannels;
+  *pixels = data;
+  return kIsochartsImageOk;
+}
+
+int write_file(const char* path, int width, int height, int channels, int stride, const float* pixels,
+               int as_float, int alpha, const char* names, const char* const* attributes, char* message,
+               std::size_t message_size) {
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) {
+    OIIO::geterror();  // names the file; the caller's message names the format
+    return report(kIsochartsImageUnsupported, "unsupported image format", message, message_size);
+  }
+  OIIO::ImageSpec spec(width, height, channels, as_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+  spec.alpha_channel = alpha;
+  // Our pixels have straight alpha; without this the writer would divide colours by alpha.
+  if (alpha >= 0) spec.attribute("oiio:UnassociatedAlpha", 1);
+  if (names) {
+    spec.channelnames.clear();
+    for (const char* p = names; *p;) {
+      const char* end = std::strchr(p, '\n');
+      if (!end) end = p + std::strlen(p);
+      spec.channelnames.emplace_back(p, end);
+      p = *end ? end + 1 : end;
+    }
+    spec.channelnames.resize(channels);
+  }
+  if (attributes)
+    for (const char* const* a = attributes; a[0] && a[1]; a += 2) spec.attribute(a[0], a[1]);
+  auto fail = [&](const std::string& detail) {
+    out.reset();
+    std::remove(path);
+    OIIO::geterror();
+    return report(kIsochartsImageError, one_line(detail), message, message_size);
+  };
+  if (!out->open(path, spec)) return fail(out->geterror());
+  const auto xstride = static_cast<OIIO::stride_t>(sizeof(float)) * stride;
+  if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels, xstride)) return fail(out->geterror());
+  if (!out->close()) return fail(out->geterror());
+  return kIsochartsImageOk;
+}
+
+// Nothing may escape across the C boundary.
+int safe_read(const char* path, long long max_values, int* width, int* height, int* channels, float** pixels,
+              char* names, std::size_t names_size, char* message, std::size_t message_size) {
+  try {
+    return read_file(path, max_values, width, height, channels, pixels, names, names_size, message,
+                     message_size);
+  } catch (const std::bad_alloc&) {
+    return report(kIsochartsImageError, "out of memory reading the image", message, message_size);
+  } catch (const std::exception& e) {
+    return report(kIsochartsImageInputError, with_detail("cannot read image", e.what()), message,
+                  message_size);
+  }
+}
+
+int safe_write(const char* path, int width, int height, int channels, int stride, const float* pixels,
+               int as_float, int alpha, const char* names, const char* const* attributes, char* message,
+               std::size_t message_size) {
+  try {
+    return write_file(path, width, height, channels, stride, pixels, as_float, alpha, names, attributes,
+                      message, message_size);
+  } catch (const std::exception& e) {
+    std::remove(path);
+    return report(kIsochartsImageError, one_line(e.what()), message, message_size);
+  }
+}
+
+void free_pixels(float* p) {
+  std::free(p);
+}
+
+const IsochartsImageModule kModule = {ISOCHARTS_IMAGE_MODULE_ABI, safe_read, free_pixels, safe_write};
+
+}  // namespace
+
+extern "C" __attribute__((visibility("default"))) const IsochartsImageModule* isocharts_image_module() {
+  return &kModule;
+}
