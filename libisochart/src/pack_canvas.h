@@ -64,6 +64,15 @@ class Canvas {
   /// Adds the raster, dilated by the gutter, at (x, y).
   void place(const ChartRaster& r, int x, int y);
 
+  /// Canvas size in texels, whether texel (x, y) is taken (a dilated chart texel), and the side
+  /// of the largest free square with its lower-left texel at (x, y), capped at kSquareCap
+  /// (the map the searches prune with; exposed for tests).
+  int width() const { return width_; }
+  int height() const { return height_; }
+  bool occupied(int x, int y) const { return is_set(x, y); }
+  int free_square(int x, int y) const { return square_[static_cast<std::size_t>(y) * width_ + x]; }
+  static constexpr int kSquareCap = 63;
+
  private:
   static constexpr int kBlock = 8;  // coarse occupancy blocks for early rejection
 
@@ -103,7 +112,6 @@ class Canvas {
   std::vector<long long> block_sat_;  // (blocks_y_+1) × (blocks_x_+1) summed-area table
   // Side of the largest free square whose lower-left texel is (x, y), capped, and its
   // maximum per block: a chart fits only where its core's square does.
-  static constexpr int kSquareCap = 63;
   std::vector<unsigned char> square_;
   std::vector<unsigned char> block_square_;
   // The same over super-blocks of kSuper × kSuper blocks, to skip crowded areas wholesale.

@@ -1,10 +1,10 @@
 #include "isochart/pack.h"
 
-#include <catch2/catch.hpp>
 #include <tbb/global_control.h>
 
 #include <algorithm>
 #include <atomic>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <random>
 #include <string>
@@ -13,6 +13,7 @@
 #include "isochart/io.h"
 #include "isochart/stretch.h"
 // Internal header: the fast raster is checked against the per-triangle reference.
+#include "../../libisochart/src/pack_canvas.h"
 #include "../../libisochart/src/pack_raster.h"
 
 using namespace isochart;
@@ -381,6 +382,39 @@ TEST_CASE("the outline raster equals the triangle-by-triangle raster", "[pack]")
     CHECK(fast.bits == reference.bits);
     CHECK(fast.texels > 0);
   }
+}
+
+TEST_CASE("the canvas's free-square map matches a brute-force count", "[pack]") {
+  // The map is updated incrementally (row scans that clear whole words of taken texels at
+  // once); every entry must equal the largest free square grown from it directly.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  pack_detail::Canvas canvas(120, 100, 2, 0.5);
+  for (int k = 0; k < 12; ++k) {
+    PackChart c = blob(rng, 10 + 35 * u(rng), 0.4 + u(rng), 24);
+    const auto raster =
+        pack_detail::rasterize_chart(c.uv, c.faces, pack_detail::chart_outline(c.uv, c.faces));
+    const int x = static_cast<int>((canvas.width() - raster.w - 8) * u(rng)) + 4;
+    const int y = static_cast<int>((canvas.height() - raster.h - 8) * u(rng)) + 4;
+    canvas.place(raster, x, y);  // overlaps allowed: only the map is under test
+  }
+  const int cap = pack_detail::Canvas::kSquareCap;
+  int mismatches = 0, taken = 0;
+  for (int y = 0; y < canvas.height(); ++y)
+    for (int x = 0; x < canvas.width(); ++x) {
+      taken += canvas.occupied(x, y) ? 1 : 0;
+      int s = 0;
+      while (s < cap && x + s < canvas.width() && y + s < canvas.height()) {
+        bool free = true;
+        for (int i = 0; i <= s && free; ++i)
+          free = !canvas.occupied(x + s, y + i) && !canvas.occupied(x + i, y + s);
+        if (!free) break;
+        ++s;
+      }
+      mismatches += canvas.free_square(x, y) != s ? 1 : 0;
+    }
+  CHECK(taken > 0);
+  CHECK(mismatches == 0);
 }
 
 TEST_CASE("bad charts and options are reported by name", "[pack]") {
