@@ -68,6 +68,11 @@ int main(int argc, char** argv) {
     ctx.end_progress();
     std::cerr << "isocharts: error: out of memory\n";
     return 1;
+  } catch (const isochart::Error& e) {
+    // Thrown on purpose (a failed write, image I/O that cannot be loaded, ...): not a bug.
+    ctx.end_progress();
+    std::cerr << "isocharts: error: " << e.what() << "\n";
+    return 1;
   } catch (const std::exception& e) {
     ctx.end_progress();
     std::cerr << "isocharts: internal error: " << e.what() << "\n";

@@ -58,21 +58,27 @@ const IsochartsImageModule* try_load(const std::string& file, std::string& error
 }
 
 const IsochartsImageModule* load_module() {
+  // A module named in the environment is the only one tried: the user asked for that file.
   std::vector<std::string> candidates;
-  if (const char* env = std::getenv("ISOCHARTS_IMAGE_MODULE"); env && *env) candidates.emplace_back(env);
   std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) candidates.push_back((exe.parent_path() / kModuleName).string());
-  if (*ISOCHARTS_IMAGE_MODULE_PATH) candidates.emplace_back(ISOCHARTS_IMAGE_MODULE_PATH);
+  if (const char* env = std::getenv("ISOCHARTS_IMAGE_MODULE"); env && *env) {
+    candidates.emplace_back(env);
+  } else {
+    const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+    if (!ec) candidates.push_back((exe.parent_path() / kModuleName).string());
+    if (*ISOCHARTS_IMAGE_MODULE_PATH) candidates.emplace_back(ISOCHARTS_IMAGE_MODULE_PATH);
+  }
   std::string errors;
   for (const std::string& c : candidates) {
-    if (!fs::exists(c, ec)) continue;
+    if (!fs::exists(c, ec)) {
+      errors += (errors.empty() ? "" : "; ") + c + ": no such file";
+      continue;
+    }
     if (const IsochartsImageModule* m = try_load(c, errors)) return m;
   }
-  throw Error(std::string("image I/O is unavailable: ") + kModuleName + " " +
-              (errors.empty()
-                   ? "was not found next to the program or in the build tree (set ISOCHARTS_IMAGE_MODULE)"
-                   : "could not be loaded (" + errors + ")"));
+  if (errors.empty()) errors = "no place to look for it";
+  throw Error(std::string("image I/O is unavailable: ") + kModuleName + " could not be loaded (" + errors +
+              "); keep it next to the program or set ISOCHARTS_IMAGE_MODULE");
 }
 
 const IsochartsImageModule& image_module() {

@@ -19,9 +19,9 @@ using namespace io_test;
 namespace {
 
 // Runs the CLI with stdout discarded and stderr saved; returns the exit code.
-int run_cli(const std::string& args, const fs::path& err) {
-  const std::string cmd =
-      std::string("'") + ISOCHARTS_CLI + "' " + args + " > /dev/null 2> '" + err.string() + "'";
+int run_cli(const std::string& args, const fs::path& err, const std::string& env = "") {
+  const std::string cmd = (env.empty() ? "" : env + " ") + "'" + ISOCHARTS_CLI + "' " + args +
+                          " > /dev/null 2> '" + err.string() + "'";
   const int status = std::system(cmd.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -248,4 +248,23 @@ TEST_CASE("the report is written atomically next to a good input", "[cli]") {
   CHECK(run_cli("info '" + input.string() + "' --report '" + (tmp.path / "no/dir/r.json").string() + "'",
                 err) == 2);
   CHECK_THAT(read_bytes(err), Catch::StartsWith("isocharts: error: ") && Catch::Contains("cannot write"));
+}
+
+TEST_CASE("a missing or broken image module is a clear error, and nothing is written", "[cli]") {
+  TempDir tmp("image_module");
+  const fs::path err = tmp.path / "err.txt", out = tmp.path / "view.png",
+                 bogus = tmp.path / "not_a_module.so";
+  write_bytes(bogus, "not a shared library\n");
+  for (const fs::path& module : {bogus, tmp.path / "missing.so"}) {
+    INFO(module.string());
+    CHECK(run_cli("render builtin:sphere -o '" + out.string() + "'", err,
+                  "ISOCHARTS_IMAGE_MODULE='" + module.string() + "'") == 1);
+    const std::string text = read_bytes(err);
+    CHECK_THAT(text, Catch::StartsWith("isocharts: error: image I/O is unavailable") &&
+                         Catch::Contains(module.string()));
+    CHECK(std::count(text.begin(), text.end(), '\n') == 1);
+    CHECK_FALSE(fs::exists(out));
+  }
+  // Mesh work needs no image module at all.
+  CHECK(run_cli("info builtin:sphere", err, "ISOCHARTS_IMAGE_MODULE='" + bogus.string() + "'") == 0);
 }

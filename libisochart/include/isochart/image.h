@@ -1,8 +1,8 @@
 #pragma once
 /// Float images and their file I/O through OpenImageIO (PNG, JPG, EXR, TIFF, ... by extension).
 /// The I/O runs in a module, libisocharts_imageio.so, loaded on the first read or write (see
-/// src/image_module.h for why); it is looked for at $ISOCHARTS_IMAGE_MODULE, next to the running
-/// program, then where the build put it.
+/// src/image_module.h for why): the file $ISOCHARTS_IMAGE_MODULE names when it is set, otherwise
+/// the one next to the running program, then the one where the build put it.
 
 #include <string>
 #include <utility>
