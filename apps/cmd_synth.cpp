@@ -30,6 +30,8 @@ struct SynthArgs {
   int neighborhood = 5;
   int coarse_neighborhood = 3;
   int full_passes = -1;     // -1: the library's default
+  int start_passes = -1;    // -1: the library's default
+  double coherence = -1;    // < 0: the library's default
   int start_samples = -1;   // -1: the library's default
   int start_level = -1;     // -1: automatic
   int symmetry = -1;        // -1: the library's default
@@ -89,6 +91,8 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   so.neighborhood = a.neighborhood;
   so.coarse_neighborhood = a.coarse_neighborhood;
   if (a.full_passes >= 0) so.full_passes = a.full_passes;
+  if (a.start_passes >= 0) so.coarsest_passes = a.start_passes;
+  if (a.coherence >= 0) so.coherence = a.coherence;
   if (a.start_samples >= 0) so.min_level_samples = a.start_samples;
   if (a.start_level < -1) bad_option("--start-level takes a pyramid index (0 = finest) or -1 (automatic)");
   so.start_level = a.start_level;
@@ -190,6 +194,13 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(1, 15));
   sub->add_option("--passes", args->full_passes, "Non-causal passes per level after the first synthesized (default 2)")
       ->check(CLI::Range(0, 10));
+  sub->add_option("--start-passes", args->start_passes,
+                  "Non-causal passes on the first synthesized level after its exemplar copy (default 2)")
+      ->check(CLI::Range(0, 10));
+  sub->add_option("--coherence", args->coherence,
+                  "How much better (relative neighbourhood distance) a match elsewhere in the exemplar must be "
+                  "than continuing a neighbour's patch (default 0.1)")
+      ->check(CLI::Range(0.0, 10.0));
   sub->add_option("--start-samples", args->start_samples,
                   "Never synthesize pyramid levels with fewer samples than N (default 1000)")
       ->check(CLI::Range(1, 1 << 28));

@@ -162,6 +162,64 @@ Vec3d symmetric_representative(const Vec3d& d, const Vec3d& normal, int symmetry
   return best;
 }
 
+// Exemplar coordinates of every reached sample of `g` (one per zipper group) minimizing
+// Σ |c_t − c_s − d_st|² over image neighbours in one chart, d_st their surface offset in the
+// field's frame (in exemplar pixels): the breadth-first copy follows the field along its tree
+// only, and where two fronts meet the field's curl piles up as a shear line; the least-squares
+// fit spreads it as a slow bend. Pairs whose frames disagree (the cut around the N-direction
+// field's singularities) are left out. A weak pull toward the breadth-first coordinates fixes
+// each component's translation.
+void relax_exemplar_coords(const mcgim::GeometryImage& g, const LevelGeometry& geo, double spacing,
+                           std::vector<Vec2d>& coord, const std::vector<char>& reached) {
+  const int groups = g.num_groups;
+  std::vector<int> rep(groups, -1);
+  for (int s = 0; s < g.width * g.height; ++s)
+    if (g.defined(s) && reached[s] && rep[g.group[s]] < 0) rep[g.group[s]] = s;
+  std::vector<Eigen::Triplet<double>> trip;
+  Eigen::VectorXd bx = Eigen::VectorXd::Zero(groups), by = Eigen::VectorXd::Zero(groups);
+  // Far below the smallest non-zero eigenvalue of a ~200-sample-wide grid Laplacian (~1e-4), so
+  // that only the translation is held.
+  const double anchor = 1e-7;
+  for (int gi = 0; gi < groups; ++gi) {
+    if (rep[gi] < 0) {
+      trip.emplace_back(gi, gi, 1.0);
+      continue;
+    }
+    trip.emplace_back(gi, gi, anchor);
+    bx[gi] += anchor * coord[rep[gi]].x;
+    by[gi] += anchor * coord[rep[gi]].y;
+  }
+  for (int y = 0; y < g.height; ++y)
+    for (int x = 0; x < g.width; ++x) {
+      const int s = g.index(x, y);
+      if (!g.defined(s) || !reached[s]) continue;
+      const int nb[2][2] = {{x + 1, y}, {x, y + 1}};
+      for (const auto& q : nb) {
+        if (q[0] >= g.width || q[1] >= g.height) continue;
+        const int t = g.index(q[0], q[1]);
+        if (!g.defined(t) || !reached[t] || g.chart[t] != g.chart[s]) continue;
+        const int gs = g.group[s], gt = g.group[t];
+        if (gs == gt || isochart::dot(geo.t1(s), geo.t1(t)) < 0.5) continue;
+        const Vec3d w = g.positions[t] - g.positions[s];
+        const Vec3d a1 = geo.t1(s) + geo.t1(t), a2 = geo.t2(s) + geo.t2(t);
+        const double dx = isochart::dot(a1, w) / (2 * spacing), dy = -isochart::dot(a2, w) / (2 * spacing);
+        trip.emplace_back(gs, gs, 1.0);
+        trip.emplace_back(gt, gt, 1.0);
+        trip.emplace_back(gs, gt, -1.0);
+        trip.emplace_back(gt, gs, -1.0);
+        bx[gs] -= dx, bx[gt] += dx;
+        by[gs] -= dy, by[gt] += dy;
+      }
+    }
+  Eigen::SparseMatrix<double> a(groups, groups);
+  a.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
+  if (solver.info() != Eigen::Success) throw isochart::Error("synth: exemplar-copy factorization failed");
+  const Eigen::VectorXd cx = solver.solve(bx), cy = solver.solve(by);
+  for (int s = 0; s < g.width * g.height; ++s)
+    if (g.defined(s) && reached[s]) coord[s] = {cx[g.group[s]], cy[g.group[s]]};
+}
+
 }  // namespace
 
 namespace {
@@ -730,6 +788,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
           }
         }
       }
+      if (o.relax_copy) relax_exemplar_coords(g, geo[l], spacing, coord, reached);
       for (int gi = 0; gi < groups; ++gi) {
         const int s = reps[l][gi];
         if (s < 0 || !reached[s]) continue;

@@ -45,6 +45,11 @@ struct SynthOptions {
   int first_pass_batch = 256;
   int full_passes = 2;      ///< non-causal passes per level after the coarsest
   int coarsest_passes = 2;  ///< non-causal passes on the first synthesized level after its exemplar copy
+  /// The first synthesized level's exemplar copy is grown breadth-first along the direction
+  /// field; true: its exemplar coordinates are then replaced by the least-squares fit of the
+  /// field's offsets over all neighbour pairs, which spreads the field's curl evenly instead of
+  /// leaving it as shears where the growth fronts meet.
+  bool relax_copy = true;
   /// Coherence bias (Hertzmann et al. 2001's κ): a kd-tree candidate must be this much better
   /// (relative distance) than the best coherent one to be chosen. 0: no preference.
   double coherence = 0.1;
