@@ -403,9 +403,16 @@ void remove_near_segment(LocalGrid& g, const Vec2d& a, const Vec2d& b, double ra
 // Where a concave notch of the chart is narrower than the sample spacing, samples on its two
 // sides are neighbours and block triangles would bridge it, covering the neighbouring chart's
 // surface a second time. Removes both ends of every sample edge (4- or 8-neighbours) that runs
-// outside the chart for more than a quarter texel.
+// outside the chart for more than a quarter texel, or that crosses the notch anywhere when the
+// notch is deeper than a texel: the slits the atlas cut to open a chart around a hole have zero
+// width, and unless the ring of samples enters them, zippering contracts the slit and joins
+// the hole to the slit's mouth.
 void remove_bridges(LocalGrid& g, const Chart& ch, const std::vector<Vec2d>& texel, long long& removed) {
   const int L = static_cast<int>(ch.loop.size());
+  // Texel length along the loop to the start of each edge.
+  std::vector<double> along(L + 1, 0.0);
+  for (int e = 0; e < L; ++e) along[e + 1] = along[e] + norm(texel[ch.loop[(e + 1) % L]] - texel[ch.loop[e]]);
+  const double perimeter = along[L];
   // Loop edges by local cell: cell (i, j) spans the samples (i, j) .. (i + 1, j + 1).
   std::vector<std::vector<int>> cells(static_cast<std::size_t>(g.w) * g.h);
   auto local = [&](const Vec2d& p) { return Vec2d(p.x - 0.5 - g.x0, p.y - 0.5 - g.y0); };
@@ -420,7 +427,7 @@ void remove_bridges(LocalGrid& g, const Chart& ch, const std::vector<Vec2d>& tex
   }
   std::vector<char> drop(g.in.size(), 0);
   std::vector<int> cand;
-  std::vector<double> ts;
+  std::vector<std::pair<double, double>> ts;  // crossing: parameter on the sample edge, loop position
   static constexpr int kNx[4] = {1, 1, 0, -1}, kNy[4] = {0, 1, 1, 1};
   for (int y = 0; y < g.h; ++y)
     for (int x = 0; x < g.w; ++x) {
@@ -445,13 +452,18 @@ void remove_bridges(LocalGrid& g, const Chart& ch, const std::vector<Vec2d>& tex
           const double den = cross(dq, db);
           if (den == 0) continue;
           const double t = cross(a - p, db) / den, u = cross(a - p, dq) / den;
-          if (t >= 0 && t <= 1 && u >= 0 && u <= 1) ts.push_back(t);
+          if (t >= 0 && t <= 1 && u >= 0 && u <= 1) ts.emplace_back(t, along[e] + u * (along[e + 1] - along[e]));
         }
         if (ts.size() < 2) continue;
         std::sort(ts.begin(), ts.end());
         double outside = 0;
-        for (std::size_t k = 0; k + 1 < ts.size(); k += 2) outside += ts[k + 1] - ts[k];
-        if (outside * norm(dq) > 0.25) drop[g.at(x, y)] = drop[g.at(xx, yy)] = 1;
+        bool deep = false;
+        for (std::size_t k = 0; k + 1 < ts.size(); k += 2) {
+          outside += ts[k + 1].first - ts[k].first;
+          const double gap = std::abs(ts[k + 1].second - ts[k].second);
+          deep = deep || std::min(gap, perimeter - gap) > 2.0;
+        }
+        if (outside * norm(dq) > 0.25 || deep) drop[g.at(x, y)] = drop[g.at(xx, yy)] = 1;
       }
     }
   for (std::size_t v = 0; v < g.in.size(); ++v)

@@ -166,4 +166,40 @@ inline Mesh cylinder_atlas(int n, int k, double margin = 0.04) {
   return m;
 }
 
+/// Unit square (z = 0), n×n quads, with the quad (hi, hj) left out: a hole 1/n wide. One chart,
+/// opened into a disk by a zero-width slit along the grid line y = hj/n from the hole's corner
+/// (hi + 1, hj) to the right edge, as the atlas builder slits a chart around a hole: the faces
+/// below the slit use their own texture vertices there, `width` lower in texture space (0: at
+/// the same positions; a stretch optimizer moves the two sides slightly apart).
+inline Mesh slit_plane_atlas(int n, int hi, int hj, double width = 0.0, double margin = 0.05) {
+  Mesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) m.positions.push_back({static_cast<double>(i) / n, static_cast<double>(j) / n, 0.0});
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      m.uvs.push_back({margin + (1 - 2 * margin) * i / n, margin + (1 - 2 * margin) * j / n});
+  auto vid = [&](int i, int j) { return j * (n + 1) + i; };
+  // The slit's second side: copies of the texture vertices on y = hj/n, x >= (hi + 1)/n.
+  std::map<int, int> lower;
+  for (int i = hi + 1; i <= n; ++i) {
+    lower[i] = static_cast<int>(m.uvs.size());
+    m.uvs.push_back(m.uvs[vid(i, hj)] - Vec2d{0.0, i > hi + 1 ? width : 0.0});
+  }
+  auto tid = [&](int i, int j, bool below) {
+    if (below && j == hj && lower.count(i)) return lower[i];
+    return vid(i, j);
+  };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      if (i == hi && j == hj) continue;
+      const bool below = j == hj - 1;  // the quads touching the slit from below
+      m.faces.push_back({vid(i, j), vid(i + 1, j), vid(i + 1, j + 1)});
+      m.face_uvs.push_back({tid(i, j, below), tid(i + 1, j, below), tid(i + 1, j + 1, below)});
+      m.faces.push_back({vid(i, j), vid(i + 1, j + 1), vid(i, j + 1)});
+      m.face_uvs.push_back({tid(i, j, below), tid(i + 1, j + 1, below), tid(i, j + 1, below)});
+    }
+  m.face_groups.assign(m.faces.size(), 0);
+  return m;
+}
+
 }  // namespace mcgim_test
