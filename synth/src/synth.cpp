@@ -11,7 +11,6 @@
 #include <numeric>
 
 #include <Eigen/Dense>
-#include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <flann/flann.hpp>
@@ -169,13 +168,9 @@ Vec3d symmetric_representative(const Vec3d& d, const Vec3d& normal, int symmetry
 // only, and where two fronts meet the field's curl piles up as a shear line; the least-squares
 // fit spreads it as a slow bend. Pairs whose frames disagree (the cut around the N-direction
 // field's singularities) are left out. A weak pull toward the breadth-first coordinates fixes
-// each component's translation. Up to `direct_max` groups the system is factorized; above, the
-// factorization's fill grows too fast (a 640k-sample grid: 13 s, 0.5 GB), and `iterations` of
-// conjugate gradients from the breadth-first copy smooth its shear lines instead (they are sharp,
-// so they go first) without straightening the slowest bends.
+// each component's translation.
 void relax_exemplar_coords(const mcgim::GeometryImage& g, const LevelGeometry& geo, double spacing,
-                           int direct_max, int iterations, std::vector<Vec2d>& coord,
-                           const std::vector<char>& reached) {
+                           std::vector<Vec2d>& coord, const std::vector<char>& reached) {
   const int groups = g.num_groups;
   std::vector<int> rep(groups, -1);
   for (int s = 0; s < g.width * g.height; ++s)
@@ -218,22 +213,9 @@ void relax_exemplar_coords(const mcgim::GeometryImage& g, const LevelGeometry& g
     }
   Eigen::SparseMatrix<double> a(groups, groups);
   a.setFromTriplets(trip.begin(), trip.end());
-  Eigen::VectorXd cx, cy;
-  if (groups <= direct_max) {
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
-    if (solver.info() != Eigen::Success) throw isochart::Error("synth: exemplar-copy factorization failed");
-    cx = solver.solve(bx);
-    cy = solver.solve(by);
-  } else {
-    Eigen::VectorXd x0 = Eigen::VectorXd::Zero(groups), y0 = Eigen::VectorXd::Zero(groups);
-    for (int gi = 0; gi < groups; ++gi)
-      if (rep[gi] >= 0) x0[gi] = coord[rep[gi]].x, y0[gi] = coord[rep[gi]].y;
-    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper> cg;
-    cg.setMaxIterations(iterations);
-    cg.compute(a);
-    cx = cg.solveWithGuess(bx, x0);
-    cy = cg.solveWithGuess(by, y0);
-  }
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
+  if (solver.info() != Eigen::Success) throw isochart::Error("synth: exemplar-copy factorization failed");
+  const Eigen::VectorXd cx = solver.solve(bx), cy = solver.solve(by);
   for (int s = 0; s < g.width * g.height; ++s)
     if (g.defined(s) && reached[s]) coord[s] = {cx[g.group[s]], cy[g.group[s]]};
 }
@@ -806,8 +788,12 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
           }
         }
       }
-      if (o.relax_copy)
-        relax_exemplar_coords(g, geo[l], spacing, o.copy_direct_max, o.copy_iterations, coord, reached);
+      // The factorization's fill grows faster than the samples (grid Laplacians, measured: 0.1 s
+      // for 40k unknowns, 8 s and 0.5 GB for 640k, 18 s and 0.8 GB for 1M), so larger levels
+      // keep the breadth-first copy. 300 conjugate-gradient steps from it instead left long
+      // wavy smears on bunny at 1024² (663k samples), worse than the copy itself.
+      if (o.relax_copy && groups <= o.relax_copy_max)
+        relax_exemplar_coords(g, geo[l], spacing, coord, reached);
       for (int gi = 0; gi < groups; ++gi) {
         const int s = reps[l][gi];
         if (s < 0 || !reached[s]) continue;

@@ -50,12 +50,9 @@ struct SynthOptions {
   /// field's offsets over all neighbour pairs, which spreads the field's curl evenly instead of
   /// leaving it as shears where the growth fronts meet.
   bool relax_copy = true;
-  /// The fit is solved exactly (sparse LDLT) up to this many samples (zipper groups), above that
-  /// by `copy_iterations` conjugate-gradient steps from the breadth-first copy, which remove
-  /// its shear lines but not all of its slow bends (the factorization's memory and time grow
-  /// too fast beyond: 0.1 s for 40k samples, 13 s and 0.5 GB for 640k).
-  int copy_direct_max = 250000;
-  int copy_iterations = 300;
+  /// The fit (a sparse factorization) is made up to this many samples (zipper groups) of the
+  /// first level; larger levels keep the breadth-first copy.
+  int relax_copy_max = 1'100'000;
   /// Coherence bias (Hertzmann et al. 2001's κ): a kd-tree candidate must be this much better
   /// (relative distance) than the best coherent one to be chosen. 0: no preference.
   double coherence = 0.1;
