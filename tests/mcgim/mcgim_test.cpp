@@ -57,6 +57,15 @@ void check_watertight(const Level& lv, int euler) {
   CHECK(lv.stats.unique_vertices <= lv.stats.defined_samples);
 }
 
+// An annulus: two boundary loops, edge-manifold, Euler characteristic 0.
+void check_annulus(const Level& lv) {
+  const TopologyCheck& t = lv.stats.topology;
+  CHECK(t.boundary_loops == 2);
+  CHECK(t.nonmanifold_edges == 0);
+  CHECK(t.nonmanifold_vertices == 0);
+  CHECK(t.euler_characteristic == 0);
+}
+
 }  // namespace
 
 TEST_CASE("closed synthetic atlases remesh watertight at several resolutions", "[mcgim]") {
@@ -82,11 +91,7 @@ TEST_CASE("an open mesh keeps its boundary loops", "[mcgim]") {
   for (int res : {24, 40, 64, 128}) {
     INFO("cylinder " << res);
     const Level lv = build_level(mcgim_test::cylinder_atlas(32, 8), keep_layout(res));
-    const TopologyCheck& t = lv.stats.topology;
-    CHECK(t.boundary_loops == 2);
-    CHECK(t.nonmanifold_edges == 0);
-    CHECK(t.nonmanifold_vertices == 0);
-    CHECK(t.euler_characteristic == 0);
+    check_annulus(lv);
     CHECK(lv.stats.input_boundary_loops == 2);
   }
 }
@@ -104,11 +109,7 @@ TEST_CASE("a chart with a hole is slit open and zippered back", "[mcgim]") {
   m.face_groups.assign(m.faces.size(), 0);
   for (int res : {48, 96}) {
     const Level lv = build_level(m, keep_layout(res));
-    const TopologyCheck& t = lv.stats.topology;
-    CHECK(t.boundary_loops == 2);
-    CHECK(t.nonmanifold_edges == 0);
-    CHECK(t.nonmanifold_vertices == 0);
-    CHECK(t.euler_characteristic == 0);
+    check_annulus(lv);
   }
 }
 
@@ -122,11 +123,7 @@ TEST_CASE("a thin slit to a hole smaller than a texel is sampled open", "[mcgim]
     for (int res : {32, 48, 64}) {
       INFO("slit width " << width << ", resolution " << res);
       const Level lv = build_level(m, keep_layout(res));
-      const TopologyCheck& t = lv.stats.topology;
-      CHECK(t.boundary_loops == 2);
-      CHECK(t.nonmanifold_edges == 0);
-      CHECK(t.nonmanifold_vertices == 0);
-      CHECK(t.euler_characteristic == 0);
+      check_annulus(lv);
       DistanceOptions d;
       d.samples = 20000;
       const DistanceResult r = measure_distance(m, lv.remesh.mesh, d);
