@@ -162,6 +162,14 @@ Vec3d symmetric_representative(const Vec3d& d, const Vec3d& normal, int symmetry
   return best;
 }
 
+// Exemplar-pixel offset from sample s to its image neighbour t: their surface offset in the
+// mean of their direction-field frames (+b on the surface is up in the exemplar, so y flips).
+Vec2d field_offset(const mcgim::GeometryImage& g, const LevelGeometry& geo, double spacing, int s, int t) {
+  const Vec3d w = g.positions[t] - g.positions[s];
+  const Vec3d a1 = geo.t1(s) + geo.t1(t), a2 = geo.t2(s) + geo.t2(t);
+  return {isochart::dot(a1, w) / (2 * spacing), -isochart::dot(a2, w) / (2 * spacing)};
+}
+
 // Exemplar coordinates of every reached sample of `g` (one per zipper group) minimizing
 // Σ |c_t − c_s − d_st|² over image neighbours in one chart, d_st their surface offset in the
 // field's frame (in exemplar pixels): the breadth-first copy follows the field along its tree
@@ -177,8 +185,8 @@ void relax_exemplar_coords(const mcgim::GeometryImage& g, const LevelGeometry& g
     if (g.defined(s) && reached[s] && rep[g.group[s]] < 0) rep[g.group[s]] = s;
   std::vector<Eigen::Triplet<double>> trip;
   Eigen::VectorXd bx = Eigen::VectorXd::Zero(groups), by = Eigen::VectorXd::Zero(groups);
-  // Far below the smallest non-zero eigenvalue of a ~200-sample-wide grid Laplacian (~1e-4), so
-  // that only the translation is held.
+  // Far below the smallest non-zero eigenvalue of the grid Laplacian (~1e-4 for 200 samples
+  // across, ~1e-5 for 1000), so that only the translation is held.
   const double anchor = 1e-7;
   for (int gi = 0; gi < groups; ++gi) {
     if (rep[gi] < 0) {
@@ -200,15 +208,13 @@ void relax_exemplar_coords(const mcgim::GeometryImage& g, const LevelGeometry& g
         if (!g.defined(t) || !reached[t] || g.chart[t] != g.chart[s]) continue;
         const int gs = g.group[s], gt = g.group[t];
         if (gs == gt || isochart::dot(geo.t1(s), geo.t1(t)) < 0.5) continue;
-        const Vec3d w = g.positions[t] - g.positions[s];
-        const Vec3d a1 = geo.t1(s) + geo.t1(t), a2 = geo.t2(s) + geo.t2(t);
-        const double dx = isochart::dot(a1, w) / (2 * spacing), dy = -isochart::dot(a2, w) / (2 * spacing);
+        const Vec2d d = field_offset(g, geo, spacing, s, t);
         trip.emplace_back(gs, gs, 1.0);
         trip.emplace_back(gt, gt, 1.0);
         trip.emplace_back(gs, gt, -1.0);
         trip.emplace_back(gt, gs, -1.0);
-        bx[gs] -= dx, bx[gt] += dx;
-        by[gs] -= dy, by[gt] += dy;
+        bx[gs] -= d.x, bx[gt] += d.x;
+        by[gs] -= d.y, by[gt] += d.y;
       }
     }
   Eigen::SparseMatrix<double> a(groups, groups);
@@ -780,9 +786,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
             if (q[0] < 0 || q[1] < 0 || q[0] >= g.width || q[1] >= g.height) continue;
             const int t = g.index(q[0], q[1]);
             if (reached[t] || g.chart[t] != g.chart[s]) continue;
-            const Vec3d w = g.positions[t] - g.positions[s];
-            const Vec3d a1 = geo[l].t1(s) + geo[l].t1(t), a2 = geo[l].t2(s) + geo[l].t2(t);
-            coord[t] = {coord[s].x + isochart::dot(a1, w) / (2 * spacing), coord[s].y - isochart::dot(a2, w) / (2 * spacing)};
+            coord[t] = coord[s] + field_offset(g, geo[l], spacing, s, t);
             reached[t] = 1;
             queue.push_back(t);
           }
