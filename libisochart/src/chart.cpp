@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <numeric>
 #include <queue>
@@ -247,62 +248,56 @@ bool lscm(const ChartGeometry& g, std::vector<Vec2d>& uv, const Topology* given)
   const int p1 = farthest(p0);
   if (p0 == p1) return false;
   const double pin_len = norm(g.positions[p0] - g.positions[p1]);
-  // Unknowns: (u, v) of every free vertex.
+  // With z = u + iv per vertex and w_k = ∂φk/∂x + i ∂φk/∂y, a face's Cauchy–Riemann residuals
+  // are the real and imaginary parts of Σ w_k z_k, so LSCM is a complex least-squares problem
+  // whose normal matrix is Hermitian with one entry per vertex pair: half the unknowns of the
+  // real (u, v) system, a quarter of its entries, and no sparse product to form it.
   std::vector<int> index(nv, -1);
   int n = 0;
   for (int v = 0; v < nv; ++v)
     if (v != p0 && v != p1 && topo.is_referenced(v)) index[v] = n++;
-  const Vec2d pinned[2] = {{0, 0}, {pin_len, 0}};
+  using Complex = std::complex<double>;
+  const Complex pinned[2] = {{0, 0}, {pin_len, 0}};
   auto pin_of = [&](int v) { return v == p0 ? pinned[0] : pinned[1]; };
-  using Triplet = Eigen::Triplet<double>;
-  std::vector<Triplet> trips;
-  std::vector<double> rhs_rows;
-  int row = 0;
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * g.num_faces());
+  std::vector<Eigen::Triplet<Complex>> trips;
+  trips.reserve(9 * g.tris.size());
+  Eigen::VectorXcd rhs = Eigen::VectorXcd::Zero(n);
   for (const Face& t : g.tris) {
     const Vec3d a = g.positions[t[0]], b = g.positions[t[1]], c = g.positions[t[2]];
     const Vec3d e1 = b - a, e2 = c - a;
     const double l1 = norm(e1);
     const double area = 0.5 * norm(cross(e1, e2));
-    if (l1 <= 0 || area <= 0) {
-      row += 2;
-      continue;
-    }
+    if (l1 <= 0 || area <= 0) continue;
     const Vec3d ux = e1 / l1;
     const double x[3] = {0, l1, dot(e2, ux)};
     const double y[3] = {0, 0, std::sqrt(std::max(squared_norm(e2) - x[2] * x[2], 0.0))};
-    const double w = 1.0 / std::sqrt(2 * area);  // sqrt(A) · 1/(2A)
-    for (int k = 0; k < 3; ++k) {
-      const double dx = (y[(k + 1) % 3] - y[(k + 2) % 3]) * w;  // ∂φk/∂x · sqrt(A)·2A/(2A)
-      const double dy = (x[(k + 2) % 3] - x[(k + 1) % 3]) * w;
-      const int v = t[k];
-      // r1 = Σ u ∂x − v ∂y ; r2 = Σ u ∂y + v ∂x (Cauchy–Riemann residuals).
-      if (index[v] >= 0) {
-        trips.emplace_back(row, 2 * index[v], dx);
-        trips.emplace_back(row, 2 * index[v] + 1, -dy);
-        trips.emplace_back(row + 1, 2 * index[v], dy);
-        trips.emplace_back(row + 1, 2 * index[v] + 1, dx);
-      } else {
-        const Vec2d p = pin_of(v);
-        rhs[row] -= dx * p.x - dy * p.y;
-        rhs[row + 1] -= dy * p.x + dx * p.y;
-      }
+    const double s = 1.0 / std::sqrt(2 * area);  // sqrt(A) · 1/(2A): area-weighted residuals
+    Complex w[3];
+    for (int k = 0; k < 3; ++k)
+      w[k] = Complex((y[(k + 1) % 3] - y[(k + 2) % 3]) * s, (x[(k + 2) % 3] - x[(k + 1) % 3]) * s);
+    Complex fixed = 0;  // the pinned corners' part of the residual
+    for (int k = 0; k < 3; ++k)
+      if (index[t[k]] < 0) fixed += w[k] * pin_of(t[k]);
+    for (int i = 0; i < 3; ++i) {
+      const int r = index[t[i]];
+      if (r < 0) continue;
+      rhs[r] -= std::conj(w[i]) * fixed;
+      for (int k = 0; k < 3; ++k)
+        if (index[t[k]] >= 0) trips.emplace_back(r, index[t[k]], std::conj(w[i]) * w[k]);
     }
-    row += 2;
   }
-  Eigen::SparseMatrix<double> A(row, 2 * n);
-  A.setFromTriplets(trips.begin(), trips.end());
-  const Eigen::SparseMatrix<double> AtA = A.transpose() * A;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(AtA);
+  Eigen::SparseMatrix<Complex> N(n, n);
+  N.setFromTriplets(trips.begin(), trips.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<Complex>> solver(N);
   if (solver.info() != Eigen::Success) return false;
-  const Eigen::VectorXd sol = solver.solve(A.transpose() * rhs);
+  const Eigen::VectorXcd sol = solver.solve(rhs);
   if (solver.info() != Eigen::Success || !sol.allFinite()) return false;
   uv.assign(nv, Vec2d{});
   for (int v = 0; v < nv; ++v) {
     if (index[v] >= 0)
-      uv[v] = {sol[2 * index[v]], sol[2 * index[v] + 1]};
+      uv[v] = {sol[index[v]].real(), sol[index[v]].imag()};
     else if (v == p0 || v == p1)
-      uv[v] = pin_of(v);
+      uv[v] = {pin_of(v).real(), pin_of(v).imag()};
   }
   return true;
 }
