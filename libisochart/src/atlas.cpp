@@ -575,6 +575,9 @@ class Builder {
     detail::ParamOptions po = param_;
     po.seed = chart_seed(faces);
     po.lscm_on_any_failure = true;
+    // Over the 14 shared meshes no accepted union started above 0.07 % (of 204), and 150 of
+    // 525 failed ones did, some of them spending a second in optimization.
+    po.max_start_overlap = 0.002;
     try_accept(g, topo, start_uncut, po, out);
     return out;
   }

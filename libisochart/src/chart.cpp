@@ -332,6 +332,53 @@ void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o) {
   p.accepted = st.flipped == 0 && !p.overlaps && p.l2 <= o.max_l2 && st.linf <= o.max_linf && geometric_ok;
 }
 
+
+double multiply_covered_fraction(const std::vector<Face>& tris, const std::vector<Vec2d>& uv, double cells) {
+  Vec2d lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  Vec2d hi = -lo;
+  for (const Face& t : tris)
+    for (int k = 0; k < 3; ++k) {
+      lo = {std::min(lo.x, uv[t[k]].x), std::min(lo.y, uv[t[k]].y)};
+      hi = {std::max(hi.x, uv[t[k]].x), std::max(hi.y, uv[t[k]].y)};
+    }
+  const double bw = hi.x - lo.x, bh = hi.y - lo.y;
+  if (!(bw > 0) || !(bh > 0) || !std::isfinite(bw * bh)) return 0;
+  const double h = std::sqrt(bw * bh / cells);
+  const int nx = std::max(1, static_cast<int>(std::ceil(bw / h))), ny = std::max(1, static_cast<int>(std::ceil(bh / h)));
+  std::vector<std::uint8_t> cover(static_cast<std::size_t>(nx) * ny, 0);
+  for (const Face& t : tris) {
+    Vec2d p[3] = {(uv[t[0]] - lo) / h, (uv[t[1]] - lo) / h, (uv[t[2]] - lo) / h};
+    const double area = cross(p[1] - p[0], p[2] - p[0]);
+    if (area == 0) continue;
+    if (area < 0) std::swap(p[1], p[2]);
+    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({p[0].x, p[1].x, p[2].x}) - 0.5)));
+    const int x1 = std::min(nx - 1, static_cast<int>(std::ceil(std::max({p[0].x, p[1].x, p[2].x}) - 0.5)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({p[0].y, p[1].y, p[2].y}) - 0.5)));
+    const int y1 = std::min(ny - 1, static_cast<int>(std::ceil(std::max({p[0].y, p[1].y, p[2].y}) - 0.5)));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const Vec2d c{x + 0.5, y + 0.5};
+        bool inside = true;
+        for (int k = 0; k < 3 && inside; ++k) {
+          const Vec2d a = p[k], b = p[(k + 1) % 3];
+          const double e = cross(b - a, c - a);
+          // Half-open: a centre on an edge belongs to the triangle on one side only.
+          inside = e > 0 || (e == 0 && (b.y > a.y || (b.y == a.y && b.x < a.x)));
+        }
+        if (inside) {
+          auto& n = cover[static_cast<std::size_t>(y) * nx + x];
+          if (n < 2) ++n;
+        }
+      }
+  }
+  std::size_t once = 0, more = 0;
+  for (std::uint8_t n : cover) {
+    once += n >= 1;
+    more += n >= 2;
+  }
+  return once ? static_cast<double>(more) / once : 0.0;
+}
+
 namespace {
 
 // L2 stretch over all but the worst `trim` fraction of the area: tells a globally stretched
@@ -359,6 +406,9 @@ double trimmed_l2(const ChartGeometry& g, const std::vector<Vec2d>& uv, double t
   }
   return kept > 0 ? std::sqrt(sum / kept * area2 / area3) : std::numeric_limits<double>::infinity();
 }
+
+// Grid cells of multiply_covered_fraction: about 1/500 of the layout's width each.
+constexpr double kOverlapCells = 262144;
 
 // A start folded over more than this fraction of its triangles is not untangled.
 constexpr double kMaxUntangleFraction = 0.25;
@@ -437,8 +487,12 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
     if (flips > 0 && p.initial_flip_fraction <= kMaxUntangleFraction) untangle(g.tris, uv, topo);
     p.uv = std::move(uv);
     p.initial_l2 = trimmed_l2(g, p.uv, 0.02);
-    // Optimization lowers L2 by a few tenths at most: far worse starts are not worth it.
-    if (p.initial_l2 <= kHopelessL2 * o.max_l2) optimize_stretch(g.positions, g.tris, p.uv, opt, topo);
+    // Optimization lowers L2 by a few tenths at most: far worse starts are not worth it. Nor
+    // are starts folded onto themselves on a large scale (merged charts whose halves overlap):
+    // vertex moves inside 1-ring kernels do not undo that.
+    const bool folded = o.max_start_overlap < 1 && p.initial_l2 <= kHopelessL2 * o.max_l2 &&
+                        multiply_covered_fraction(g.tris, p.uv, kOverlapCells) > o.max_start_overlap;
+    if (p.initial_l2 <= kHopelessL2 * o.max_l2 && !folded) optimize_stretch(g.positions, g.tris, p.uv, opt, topo);
     p.optimize_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     seconds += p.optimize_seconds;
     evaluate(g, p, o);

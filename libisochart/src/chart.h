@@ -69,6 +69,9 @@ struct ParamOptions {
   /// ... or whenever the given start fails: for starts that say nothing about the chart's
   /// shape (two merged parameterizations aligned by a similarity), unlike an IsoMap start.
   bool lscm_on_any_failure = false;
+  /// A start with more than this fraction of its area covered twice is not optimized (it fails
+  /// as overlapping, and LSCM gets its turn); 1 = always optimize.
+  double max_start_overlap = 1;
   /// Signal metric per parent face (AtlasOptions::face_metric), or null: the chart's L2 is
   /// then measured in it, and its geometric L2 must still meet max_geometric_l2.
   const std::vector<std::array<double, 3>>* face_metric = nullptr;
@@ -98,6 +101,12 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& isomap
 
 /// The first two embedding coordinates per vertex (empty when the embedding has fewer than two).
 std::vector<Vec2d> isomap_uv(const Embedding& e);
+
+/// Fraction of a layout's covered area covered more than once, estimated on a grid of about
+/// `cells` cells over its bounding box (cell centres inside a triangle; edges half-open, so
+/// triangles sharing an edge cover its centres once). Cheap next to an exact overlap test: it
+/// tells a start folded onto itself on a large scale, which local moves cannot undo.
+double multiply_covered_fraction(const std::vector<Face>& tris, const std::vector<Vec2d>& uv, double cells);
 
 /// Least squares conformal map (Lévy et al. 2002) with the two farthest boundary vertices pinned.
 /// Returns false if the system cannot be solved.

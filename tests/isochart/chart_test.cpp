@@ -91,3 +91,31 @@ TEST_CASE("open_slits separates slit copies without flipping", "[chart]") {
     if (origin[v] != v) moved = moved || uv[v] != uv[origin[v]];
   CHECK(moved);
 }
+
+TEST_CASE("multiply_covered_fraction tells a folded layout from a flat one", "[chart]") {
+  // A 4×4 grid of squares, two triangles each: edges and corners shared, no overlap.
+  std::vector<Vec2d> uv;
+  std::vector<Face> tris;
+  for (int j = 0; j <= 4; ++j)
+    for (int i = 0; i <= 4; ++i) uv.push_back({double(i), double(j)});
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) {
+      const int a = j * 5 + i, b = a + 1, c = a + 5, d = c + 1;
+      tris.push_back({a, b, d});
+      tris.push_back({a, d, c});
+    }
+  // Cell centres fall on the shared edges and corners at this grid size.
+  CHECK(multiply_covered_fraction(tris, uv, 64) == 0.0);
+  CHECK(multiply_covered_fraction(tris, uv, 10000) == 0.0);
+  // The right half folded back over the left half: half the covered area twice.
+  std::vector<Vec2d> folded = uv;
+  for (auto& p : folded)
+    if (p.x > 2) p.x = 4 - p.x;
+  // Folding makes the right half's triangles clockwise: counted all the same.
+  const double f = multiply_covered_fraction(tris, folded, 10000);
+  CHECK(f == Approx(1.0).margin(0.02));  // the footprint is the left half, all of it twice
+  // Two squares [0,2]² and [1,3]×[0,2]: a third of the covered area twice.
+  const std::vector<Vec2d> sq = {{0, 0}, {2, 0}, {2, 2}, {0, 2}, {1, 0}, {3, 0}, {3, 2}, {1, 2}};
+  const std::vector<Face> st = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+  CHECK(multiply_covered_fraction(st, sq, 90000) == Approx(1.0 / 3).margin(0.01));
+}
