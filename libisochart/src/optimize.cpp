@@ -64,11 +64,24 @@ inline bool metric(const FlatTriangle& q, const Vec2d& p0, const Vec2d& p1, cons
 // lo = (1 + 1e−9)/tau²): the optimizer only compares Linf with tau and uses values above it,
 // and most triangles of a chart are far inside the bound, so their two square roots and a
 // division (the hottest instructions of a sweep) are skipped without changing any decision.
-inline double linf_above(double a, double b, double c, double k2, double hi, double lo) {
-  const double disc = std::sqrt((a - c) * (a - c) + 4 * b * b);
-  const double g2max = 0.5 * (a + c + disc) * k2;
-  const double g2min = std::max(0.5 * (a + c - disc), 0.0) * k2;
-  if (g2max <= hi && g2min >= lo) return 0.0;
+struct LinfCut {
+  double k2 = 1, hi = -1, lo = kInf;
+  double r_hi = -kInf, r_lo = -kInf;  // 2·hi/k2 and 2·lo/k2, for the test without square roots
+  LinfCut() = default;
+  LinfCut(double k2_, double hi_, double lo_) : k2(k2_), hi(hi_), lo(lo_), r_hi(2 * hi_ / k2_), r_lo(2 * lo_ / k2_) {}
+};
+
+inline double linf_above(double a, double b, double c, const LinfCut& t) {
+  // First the test below without its square root: 0.5(a + c ± disc)·k2 against hi and lo is
+  // disc against r1 and r2, compared squared. It only decides which values are certainly
+  // below tau, so the rare rounding disagreement near hi or lo changes nothing either.
+  const double disc2 = (a - c) * (a - c) + 4 * b * b;
+  const double r1 = t.r_hi - (a + c), r2 = (a + c) - t.r_lo;
+  if (r1 >= 0 && r2 >= 0 && disc2 <= r1 * r1 && disc2 <= r2 * r2) return 0.0;
+  const double disc = std::sqrt(disc2);
+  const double g2max = 0.5 * (a + c + disc) * t.k2;
+  const double g2min = std::max(0.5 * (a + c - disc), 0.0) * t.k2;
+  if (g2max <= t.hi && g2min >= t.lo) return 0.0;
   const double big = std::sqrt(g2max);
   const double shrink = g2min > 0 ? 1.0 / std::sqrt(g2min) : kInf;
   return std::max(big, shrink);
@@ -157,13 +170,14 @@ class Optimizer {
       if (flat_[f].area > 0) s1_ += flat_[f].area * 0.5 * tr;
     }
     k2_ = area3_ > 0 ? s2_ / area3_ : 1.0;
+    cut_ = LinfCut(k2_, tau_hi_, tau_lo_);
     k2m_ = marea_ > 0 ? s2_ / marea_ : 1.0;
     // The penalty depends on the chart-wide normalization, so it needs k2 first.
     for (int f = 0; f < nf; ++f) {
       double a, b, c, ar;
       const Face& F = faces_[f];
       if (flat_[f].area <= 0 || !metric(flat_[f], uv_[F[0]], uv_[F[1]], uv_[F[2]], a, b, c, ar)) continue;
-      const double li = linf_above(a, b, c, k2_, tau_hi_, tau_lo_);
+      const double li = linf_above(a, b, c, cut_);
       if (li > tau_) pen_ += flat_[f].area * (li - tau_) * (li - tau_);
     }
   }
@@ -186,7 +200,7 @@ class Optimizer {
       t.state = FaceTerm::kValid;
       t.num = flat_[f].area * 0.5 * tr * k2m_;
       t.den = flat_[f].area * metric_weight(f);
-      t.linf = linf_above(a, b, c, k2_, tau_hi_, tau_lo_);
+      t.linf = linf_above(a, b, c, cut_);
     }
   }
 
@@ -226,7 +240,7 @@ class Optimizer {
       if (!metric(r.flat, p0, p1, p2, a, b, c, ar, r.g, &tr)) return false;
       s1 += r.flat.area * 0.5 * tr;
       s2 += ar;
-      const double li = linf_above(a, b, c, k2_, tau_hi_, tau_lo_);
+      const double li = linf_above(a, b, c, cut_);
       if (li > tau_) pen += r.flat.area * (li - tau_) * (li - tau_);
     }
     return true;
@@ -502,6 +516,7 @@ class Optimizer {
   double area3_ = 0, s1_ = 0, s2_ = 0, pen_ = 0, k2_ = 1, tau_ = 0;
   // Squared Linf bounds of linf_above: -1 and +inf (always exact) unless tau_ is positive.
   double tau_hi_ = -1, tau_lo_ = kInf;
+  LinfCut cut_;
   double marea_ = 0, k2m_ = 1;  // metric area and UV area / metric area (signal metric)
   bool valid_ = true;
   std::vector<int> bprev_, bnext_;
