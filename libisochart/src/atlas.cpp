@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_for_each.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <atomic>
@@ -14,9 +15,11 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <numeric>
 #include <set>
+#include <thread>
 #include <unordered_map>
 
 #include "chart.h"
@@ -361,16 +364,22 @@ class Builder {
   // Each round tries one small chart's neighbours in order, and the first success wins. A
   // merge attempt depends only on the two charts, so its outcome is kept (keyed by each chart's
   // smallest face and size, which name one state of a chart: charts only grow) until one side
-  // changes. With several threads, the idle ones meanwhile try the first pairs of the next
-  // small charts; later rounds find those outcomes ready. What is computed ahead changes only
-  // the time, never the result, so the atlas does not depend on the thread count.
-  void merge(std::vector<DoneChart>& charts) const {
+  // changes. With several threads, attempts the coming rounds will probably ask for (the next
+  // small charts' first neighbours, this round's later candidates) run in the background while
+  // the rounds go on, and a round takes an outcome from there when it is ready or being
+  // computed. What is computed ahead changes only the time, never the result, so the atlas
+  // does not depend on the thread count.
+  void merge(std::vector<DoneChart>& done) const {
     const int total_faces = mesh_.num_faces();
     const int min_charts = std::max(1, o_.max_charts);
+    // Shared with the background attempts, which must not see a chart move or change.
+    std::vector<std::shared_ptr<const DoneChart>> charts;
+    charts.reserve(done.size());
+    for (DoneChart& c : done) charts.push_back(std::make_shared<const DoneChart>(std::move(c)));
     std::vector<int> chart_of(total_faces, -1);
     auto rebuild_index = [&] {
       for (int c = 0; c < static_cast<int>(charts.size()); ++c)
-        for (int f : charts[c].geometry.faces) chart_of[f] = c;
+        for (int f : charts[c]->geometry.faces) chart_of[f] = c;
     };
     rebuild_index();
     const std::vector<Vec3d> fn = face_normals(mesh_);
@@ -380,23 +389,117 @@ class Builder {
       normals.assign(charts.size(), Vec3d{});
       for (size_t c = 0; c < charts.size(); ++c) {
         Vec3d n;
-        for (int f : charts[c].geometry.faces) n += fn[f] * fa[f];
+        for (int f : charts[c]->geometry.faces) n += fn[f] * fa[f];
         normals[c] = normalized(n);
       }
     };
     refresh_normals();
     using Key = std::pair<int, size_t>;
+    using PairKey = std::pair<Key, Key>;  // (small, neighbour)
     auto key = [&](int c) {
-      const auto& f = charts[c].geometry.faces;
+      const auto& f = charts[c]->geometry.faces;
       return Key(*std::min_element(f.begin(), f.end()), f.size());
     };
     std::vector<char> tried(charts.size(), 0);
-    std::set<std::pair<Key, Key>> failed;
-    std::map<std::pair<Key, Key>, Outcome> known;  // (small, neighbour) → outcome of merging
+    std::set<PairKey> failed;
+    std::map<PairKey, Outcome> known;  // outcomes in hand
+    // Background attempts: queued (0), running (1), done (2) or abandoned before starting (3).
+    struct Slot {
+      std::atomic<int> state{0};
+      std::shared_ptr<const DoneChart> a, b;
+      Outcome out;
+      std::exception_ptr error;
+    };
+    // Whoever moves a slot from queued to running computes it.
+    auto run_slot = [this](Slot& slot) {
+      try {
+        slot.out = merge_charts(*slot.a, *slot.b);
+      } catch (...) {
+        slot.error = std::current_exception();
+      }
+      slot.a.reset();
+      slot.b.reset();
+      slot.state.store(2, std::memory_order_release);
+    };
+    std::map<PairKey, std::shared_ptr<Slot>> ahead;
+    std::vector<std::shared_ptr<Slot>> queue;  // in the order started
+    tbb::task_group background;
+    const int threads = static_cast<int>(
+        std::min<size_t>(tbb::this_task_arena::max_concurrency(),
+                         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
+    auto start_ahead = [&](int a, int b) {
+      const PairKey k{key(a), key(b)};
+      if (known.count(k) || ahead.count(k)) return;
+      auto slot = std::make_shared<Slot>();
+      slot->a = charts[a];
+      slot->b = charts[b];
+      ahead.emplace(k, slot);
+      queue.push_back(slot);
+      background.run([slot, &run_slot] {
+        int queued = 0;
+        if (slot->state.compare_exchange_strong(queued, 1)) run_slot(*slot);  // else taken or abandoned
+      });
+    };
+    auto prune = [&] {
+      queue.erase(std::remove_if(queue.begin(), queue.end(), [](const auto& q) { return q->state.load() >= 2; }),
+                  queue.end());
+    };
+    auto in_flight = [&] {
+      int n = 0;
+      for (const auto& [k, slot] : ahead) n += slot->state.load() < 2 ? 1 : 0;
+      return n;
+    };
+    // The outcome of merging a into b: kept, computed ahead, or computed here.
+    auto obtain = [&](int a, int b) -> Outcome& {
+      const PairKey k{key(a), key(b)};
+      auto it = known.find(k);
+      if (it != known.end()) return it->second;
+      Outcome out;
+      const auto s = ahead.find(k);
+      bool computed = false;
+      if (s != ahead.end()) {
+        const std::shared_ptr<Slot> slot = s->second;
+        ahead.erase(s);
+        int queued = 0;
+        if (!slot->state.compare_exchange_strong(queued, 3)) {
+          // Running elsewhere: meanwhile take on the oldest attempt nobody has started.
+          while (slot->state.load(std::memory_order_acquire) != 2) {
+            bool helped = false;
+            for (const auto& other : queue) {
+              int q = 0;
+              if (other->state.load() == 0 && other->state.compare_exchange_strong(q, 1)) {
+                run_slot(*other);
+                helped = true;
+                break;
+              }
+            }
+            if (!helped) std::this_thread::yield();
+          }
+          if (slot->error) std::rethrow_exception(slot->error);
+          out = std::move(slot->out);
+          computed = true;
+        }
+      }
+      if (!computed) out = merge_charts(*charts[a], *charts[b]);
+      return known.emplace(k, std::move(out)).first->second;
+    };
+    auto forget = [&](const Key& gone) {
+      for (auto k = known.begin(); k != known.end();)
+        k = k->first.first == gone || k->first.second == gone ? known.erase(k) : std::next(k);
+      for (auto k = ahead.begin(); k != ahead.end();) {
+        if (k->first.first != gone && k->first.second != gone) {
+          ++k;
+          continue;
+        }
+        int queued = 0;
+        k->second->state.compare_exchange_strong(queued, 3);
+        k = ahead.erase(k);
+      }
+    };
     // Neighbours of chart c by decreasing normal similarity, without pairs known to fail.
     auto neighbours_of = [&](int c) {
       std::vector<int> nbs;
-      for (int f : charts[c].geometry.faces)
+      for (int f : charts[c]->geometry.faces)
         for (int k = 0; k < 3; ++k) {
           const int nb = topo_.opposite_face(f, k);
           if (nb >= 0 && chart_of[nb] != c && std::find(nbs.begin(), nbs.end(), chart_of[nb]) == nbs.end())
@@ -412,10 +515,7 @@ class Builder {
                 nbs.end());
       return nbs;
     };
-    auto is_small = [&](int c) { return charts[c].geometry.num_faces() <= o_.merge_max_fraction * total_faces; };
-    const int threads = static_cast<int>(
-        std::min<size_t>(tbb::this_task_arena::max_concurrency(),
-                         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
+    auto is_small = [&](int c) { return charts[c]->geometry.num_faces() <= o_.merge_max_fraction * total_faces; };
     bool progress = true;
     while (progress && static_cast<int>(charts.size()) > min_charts) {
       progress = false;
@@ -425,85 +525,56 @@ class Builder {
         if (!tried[c] && is_small(c)) smalls.push_back(c);
       if (smalls.empty()) break;
       std::stable_sort(smalls.begin(), smalls.end(), [&](int a, int b) {
-        return charts[a].geometry.num_faces() < charts[b].geometry.num_faces();
+        return charts[a]->geometry.num_faces() < charts[b]->geometry.num_faces();
       });
       const int small = smalls[0];
       tried[small] = 1;
       const std::vector<int> neighbours = neighbours_of(small);
       const Key ks = key(small);
-      // This round's attempts in order, up to the first known success, then one attempt ahead
-      // for each of the next small charts while threads would otherwise idle.
-      struct Task {
-        int a, b;
-        size_t index;  // in `neighbours` for this round's chart
-        bool ahead;
-      };
-      std::vector<Task> tasks;
-      size_t known_success = neighbours.size();
-      for (size_t i = 0; i < neighbours.size(); ++i) {
-        const auto it = known.find({ks, key(neighbours[i])});
-        if (it == known.end()) {
-          tasks.push_back({small, neighbours[i], i, false});
-        } else if (it->second.accepted) {
-          known_success = i;
-          break;
-        }
-      }
+      prune();
       if (threads > 1) {
-        std::vector<Task> ahead;
-        for (size_t j = 1; j < smalls.size() && static_cast<int>(ahead.size()) < 2 * (threads - 1); ++j) {
+        // While this thread works on the round's first candidate: the next small chart's first
+        // neighbour, the round's later candidates, then the other small charts' first ones.
+        const int budget = 2 * (threads - 1);
+        std::vector<std::pair<int, int>> wanted;
+        for (size_t j = 1; j < smalls.size(); ++j) {
           const int c = smalls[j];
           for (int nb : neighbours_of(c)) {
             if (nb == small) continue;  // about to change, either way
             const auto it = known.find({key(c), key(nb)});
             if (it != known.end() && !it->second.accepted) continue;
-            if (it == known.end()) ahead.push_back({c, nb, 0, true});
+            if (it == known.end()) wanted.emplace_back(c, nb);
             break;
           }
         }
-        // The round's first attempt, then one look-ahead, the round's other attempts (the
-        // round waits for them), and the other look-aheads last, for threads that are free.
-        if (!ahead.empty()) {
-          tasks.insert(tasks.begin() + std::min<size_t>(1, tasks.size()), ahead.front());
-          tasks.insert(tasks.end(), ahead.begin() + 1, ahead.end());
+        std::vector<std::pair<int, int>> order;
+        if (!wanted.empty()) order.push_back(wanted.front());
+        for (size_t i = 1; i < neighbours.size(); ++i) order.emplace_back(small, neighbours[i]);
+        order.insert(order.end(), wanted.begin() + std::min<size_t>(1, wanted.size()), wanted.end());
+        for (const auto& [a, b] : order) {
+          if (in_flight() >= budget) break;
+          start_ahead(a, b);
         }
       }
-      std::vector<Outcome> results(tasks.size());
-      std::atomic<size_t> first_success{known_success};
-      std::atomic<size_t> next{0};
-      tbb::parallel_for(0, std::max(1, std::min<int>(threads, static_cast<int>(tasks.size()))), [&](int) {
-        for (size_t t = next++; t < tasks.size(); t = next++) {
-          const Task& task = tasks[t];
-          // An earlier candidate of this round already succeeded: not needed.
-          if (!task.ahead && task.index > first_success.load()) continue;
-          results[t] = merge_charts(charts[task.a], charts[task.b]);
-          if (!task.ahead && results[t].accepted) {
-            size_t cur = first_success.load();
-            while (task.index < cur && !first_success.compare_exchange_weak(cur, task.index)) {
-            }
-          }
+      size_t winner = neighbours.size();
+      for (size_t i = 0; i < neighbours.size(); ++i)
+        if (obtain(small, neighbours[i]).accepted) {
+          winner = i;
+          break;
         }
-      });
-      const size_t winner = first_success.load();
-      for (size_t t = 0; t < tasks.size(); ++t)
-        if (tasks[t].ahead || tasks[t].index <= winner)
-          known.emplace(std::make_pair(key(tasks[t].a), key(tasks[t].b)), std::move(results[t]));
       // Candidates before the winner all failed: recorded so that neither side retries them
       // until one of them changes.
-      for (size_t i = 0; i < std::min(winner, neighbours.size()); ++i) failed.insert(std::minmax(ks, key(neighbours[i])));
+      for (size_t i = 0; i < winner; ++i) failed.insert(std::minmax(ks, key(neighbours[i])));
       if (winner < neighbours.size()) {
         const int nb = neighbours[winner];
         const Key kn = key(nb);
         auto it = known.find({ks, kn});
         // Replace the neighbour with the merged chart and drop the small one.
-        charts[nb] = std::move(it->second.chart);
+        charts[nb] = std::make_shared<const DoneChart>(std::move(it->second.chart));
         known.erase(it);
         // Outcomes involving either old chart are stale.
-        for (auto k = known.begin(); k != known.end();) {
-          const bool stale = k->first.first == ks || k->first.second == ks || k->first.first == kn ||
-                             k->first.second == kn;
-          k = stale ? known.erase(k) : std::next(k);
-        }
+        forget(ks);
+        forget(kn);
         tried[nb] = 0;
         charts.erase(charts.begin() + small);
         tried.erase(tried.begin() + small);
@@ -516,6 +587,14 @@ class Builder {
         progress = std::find(tried.begin(), tried.end(), 0) != tried.end();
       }
     }
+    // Attempts nobody will ask for: those not started are dropped, running ones finish.
+    for (auto& [k, slot] : ahead) {
+      int queued = 0;
+      slot->state.compare_exchange_strong(queued, 3);
+    }
+    background.wait();
+    done.clear();
+    for (auto& c : charts) done.push_back(*c);
   }
 
   // Tries to merge chart `a` into chart `b`. The start is the union of both parameterizations,
