@@ -534,8 +534,11 @@ class Builder {
       prune();
       if (threads > 1) {
         // While this thread works on the round's first candidate: the next small chart's first
-        // neighbour, the round's later candidates, then the other small charts' first ones.
-        const int budget = 2 * (threads - 1);
+        // neighbour, the round's later candidates, then the other small charts' first ones. Up
+        // to six per extra thread queued or running: with two, a round waiting for a running
+        // attempt mostly finds another to compute meanwhile (gargoyle's merging 5.6-6.4 s with
+        // two, 4.4-4.6 s with six).
+        const int budget = 6 * (threads - 1);
         std::vector<std::pair<int, int>> wanted;
         for (size_t j = 1; j < smalls.size(); ++j) {
           const int c = smalls[j];
