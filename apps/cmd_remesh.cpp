@@ -29,6 +29,7 @@ struct RemeshArgs {
   std::vector<int> levels;
   std::string exr, png;
   bool no_optimize = false;
+  int fit_passes = mcgim::LevelOptions{}.geometric_iterations;
   long long psnr_samples = 1'000'000;
   bool no_psnr = false;
   std::string signal;
@@ -114,6 +115,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
 
   mcgim::LevelOptions lo;
   lo.optimize = !a.no_optimize;
+  lo.geometric_iterations = a.fit_passes;
   lo.keep_chart_sizes = a.keep_chart_sizes || !a.signal.empty();
   std::vector<std::array<int, 2>> sizes;
   nlohmann::json search;
@@ -253,6 +255,10 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
                                       "defined mask, chart and group ids)");
   sub->add_option("--png", args->png, "Write a normal-map preview of each level as PREFIX_WxH.png");
   sub->add_flag("--no-optimize", args->no_optimize, "Keep the zippered sample positions (no fitting)");
+  sub->add_option("--fit-passes", args->fit_passes,
+                  "Closest-point fitting passes of the samples to the surface (more: higher PSNR, slower)")
+      ->check(CLI::Range(0, 20))
+      ->capture_default_str();
   sub->add_option("--psnr-samples", args->psnr_samples, "Points per surface for the PSNR (default 1000000)")
       ->check(CLI::Range(1LL, 1'000'000'000LL));
   sub->add_flag("--no-psnr", args->no_psnr, "Skip the distance measurement");
