@@ -332,7 +332,6 @@ void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o) {
   p.accepted = st.flipped == 0 && !p.overlaps && p.l2 <= o.max_l2 && st.linf <= o.max_linf && geometric_ok;
 }
 
-
 double multiply_covered_fraction(const std::vector<Face>& tris, const std::vector<Vec2d>& uv, double cells) {
   Vec2d lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
   Vec2d hi = -lo;
@@ -490,9 +489,10 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
     // Optimization lowers L2 by a few tenths at most: far worse starts are not worth it. Nor
     // are starts folded onto themselves on a large scale (merged charts whose halves overlap):
     // vertex moves inside 1-ring kernels do not undo that.
-    const bool folded = o.max_start_overlap < 1 && p.initial_l2 <= kHopelessL2 * o.max_l2 &&
-                        multiply_covered_fraction(g.tris, p.uv, kOverlapCells) > o.max_start_overlap;
-    if (p.initial_l2 <= kHopelessL2 * o.max_l2 && !folded) optimize_stretch(g.positions, g.tris, p.uv, opt, topo);
+    const bool worth = p.initial_l2 <= kHopelessL2 * o.max_l2 &&
+                       (o.max_start_overlap >= 1 ||
+                        multiply_covered_fraction(g.tris, p.uv, kOverlapCells) <= o.max_start_overlap);
+    if (worth) optimize_stretch(g.positions, g.tris, p.uv, opt, topo);
     p.optimize_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     seconds += p.optimize_seconds;
     evaluate(g, p, o);

@@ -59,11 +59,7 @@ inline bool metric(const FlatTriangle& q, const Vec2d& p0, const Vec2d& p1, cons
   return true;
 }
 
-// Normalized max(Γ, 1/γ), given the tensor and k² = (UV area / 3D area) of the whole chart,
-// where it can exceed `tau`, and 0 where it certainly does not (hi = tau²(1 − 1e−9),
-// lo = (1 + 1e−9)/tau²): the optimizer only compares Linf with tau and uses values above it,
-// and most triangles of a chart are far inside the bound, so their two square roots and a
-// division (the hottest instructions of a sweep) are skipped without changing any decision.
+// The chart-wide constants of linf_above: k² and the squared bounds hi and lo.
 struct LinfCut {
   double k2 = 1, hi = -1, lo = kInf;
   double r_hi = -kInf, r_lo = -kInf;  // 2·hi/k2 and 2·lo/k2, for the test without square roots
@@ -71,6 +67,11 @@ struct LinfCut {
   LinfCut(double k2_, double hi_, double lo_) : k2(k2_), hi(hi_), lo(lo_), r_hi(2 * hi_ / k2_), r_lo(2 * lo_ / k2_) {}
 };
 
+// Normalized max(Γ, 1/γ), given the tensor and k² = (UV area / 3D area) of the whole chart,
+// where it can exceed `tau`, and 0 where it certainly does not (hi = tau²(1 − 1e−9),
+// lo = (1 + 1e−9)/tau²): the optimizer only compares Linf with tau and uses values above it,
+// and most triangles of a chart are far inside the bound, so their two square roots and a
+// division (the hottest instructions of a sweep) are skipped without changing any decision.
 inline double linf_above(double a, double b, double c, const LinfCut& t) {
   // First the test below without its square root: 0.5(a + c ± disc)·k2 against hi and lo is
   // disc against r1 and r2, compared squared. It only decides which values are certainly
@@ -169,8 +170,7 @@ class Optimizer {
       s2_ += ar;
       if (flat_[f].area > 0) s1_ += flat_[f].area * 0.5 * tr;
     }
-    k2_ = area3_ > 0 ? s2_ / area3_ : 1.0;
-    cut_ = LinfCut(k2_, tau_hi_, tau_lo_);
+    cut_ = LinfCut(area3_ > 0 ? s2_ / area3_ : 1.0, tau_hi_, tau_lo_);
     k2m_ = marea_ > 0 ? s2_ / marea_ : 1.0;
     // The penalty depends on the chart-wide normalization, so it needs k2 first.
     for (int f = 0; f < nf; ++f) {
@@ -513,10 +513,10 @@ class Optimizer {
     bool is_v[3];
   };
   std::vector<RingFace> ring_;
-  double area3_ = 0, s1_ = 0, s2_ = 0, pen_ = 0, k2_ = 1, tau_ = 0;
+  double area3_ = 0, s1_ = 0, s2_ = 0, pen_ = 0, tau_ = 0;
   // Squared Linf bounds of linf_above: -1 and +inf (always exact) unless tau_ is positive.
   double tau_hi_ = -1, tau_lo_ = kInf;
-  LinfCut cut_;
+  LinfCut cut_;  // k² follows the chart's UV area: rebuilt with the running sums
   double marea_ = 0, k2m_ = 1;  // metric area and UV area / metric area (signal metric)
   bool valid_ = true;
   std::vector<int> bprev_, bnext_;
