@@ -99,14 +99,20 @@ std::vector<FitPoint> fit_points(const AtlasCharts& a, const Placement& pl, cons
   return pts;
 }
 
-// Points spread over the original faces (centroids of an n×n subdivision, about two per
-// texel of surface), with the area each stands for.
+// Points spread over the original faces (centroids of an n×n subdivision, about four per
+// texel of surface), with the area each stands for. Four rather than two: when the original
+// has about twice as many faces as the image has samples (the usual remeshing budget), two per
+// texel means one point per face, its centroid, and the fit never sees the face corners, where
+// a piecewise-flat surface bends (horse, feline and gargoyle at 47k samples: +0.2 dB, for a
+// third more optimization time).
 void surface_points(const Mesh& mesh, double texel_area, std::vector<Vec3d>& pts, std::vector<double>& area) {
+  constexpr double points_per_texel = 4.0;
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const Vec3d p0 = mesh.positions[mesh.faces[f][0]], p1 = mesh.positions[mesh.faces[f][1]],
                 p2 = mesh.positions[mesh.faces[f][2]];
     const double ar = isochart::triangle_area(p0, p1, p2);
-    const int n = std::clamp(static_cast<int>(std::ceil(std::sqrt(2.0 * ar / texel_area))), 1, 64);
+    const int n =
+        std::clamp(static_cast<int>(std::ceil(std::sqrt(points_per_texel * ar / texel_area))), 1, 64);
     for (int i = 0; i < n; ++i)
       for (int j = 0; i + j < n; ++j)
         for (int up = 0; up < 2; ++up) {
