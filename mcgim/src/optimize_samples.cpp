@@ -33,6 +33,22 @@ bool barycentric_2d(const Vec2d& q, const Vec2d& a, const Vec2d& b, const Vec2d&
   return true;
 }
 
+// Barycentric (u, v) of the centroids of the n×n subdivision of a triangle, n chosen for about
+// `points` of them (at least one, n ≤ 64); `fn(u, v, n²)`, n² being the number of sub-triangles.
+template <class Fn>
+void for_each_subdivision_centroid(double points, Fn&& fn) {
+  const int n = std::clamp(static_cast<int>(std::ceil(std::sqrt(points))), 1, 64);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; i + j < n; ++j)
+      // Upright sub-triangle (i, j) and, when it exists, the inverted one next to it.
+      for (int up = 0; up < 2; ++up) {
+        if (up == 1 && i + j + 1 >= n) continue;
+        const double u = up == 0 ? (i + 1.0 / 3) / n : (i + 2.0 / 3) / n;
+        const double v = up == 0 ? (j + 1.0 / 3) / n : (j + 2.0 / 3) / n;
+        fn(u, v, n * n);
+      }
+}
+
 std::vector<FitPoint> fit_points(const AtlasCharts& a, const Placement& pl, const std::vector<Vec2d>& param,
                                  const GeometryImage& im, const Remesh& r) {
   const Mesh& mesh = *a.mesh;
@@ -80,20 +96,11 @@ std::vector<FitPoint> fit_points(const AtlasCharts& a, const Placement& pl, cons
       const Vec3d p0 = mesh.positions[pf[0]], p1 = mesh.positions[pf[1]], p2 = mesh.positions[pf[2]];
       const double area3 = isochart::triangle_area(p0, p1, p2);
       const double area_t = std::abs(isochart::signed_area(t0, t1, t2));
-      // About two points per texel, at least one per face: centroids of an n×n subdivision.
-      const int n = std::clamp(static_cast<int>(std::ceil(std::sqrt(2.0 * area_t))), 1, 64);
-      const double w = area3 / (n * n);
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; i + j < n; ++j) {
-          // Upright sub-triangle (i, j) and, when it exists, the inverted one next to it.
-          for (int up = 0; up < 2; ++up) {
-            if (up == 1 && i + j + 1 >= n) continue;
-            const double u = up == 0 ? (i + 1.0 / 3) / n : (i + 2.0 / 3) / n;
-            const double v = up == 0 ? (j + 1.0 / 3) / n : (j + 2.0 / 3) / n;
-            const double b0 = 1 - u - v;
-            locate(static_cast<int>(c), t0 * b0 + t1 * u + t2 * v, p0 * b0 + p1 * u + p2 * v, w);
-          }
-        }
+      // About two points per texel.
+      for_each_subdivision_centroid(2.0 * area_t, [&](double u, double v, int cells) {
+        const double b0 = 1 - u - v;
+        locate(static_cast<int>(c), t0 * b0 + t1 * u + t2 * v, p0 * b0 + p1 * u + p2 * v, area3 / cells);
+      });
     }
   }
   return pts;
@@ -103,25 +110,19 @@ std::vector<FitPoint> fit_points(const AtlasCharts& a, const Placement& pl, cons
 // texel of surface), with the area each stands for. Four rather than two: when the original
 // has about twice as many faces as the image has samples (the usual remeshing budget), two per
 // texel means one point per face, its centroid, and the fit never sees the face corners, where
-// a piecewise-flat surface bends (horse, feline and gargoyle at 47k samples: +0.2 dB, for a
-// third more optimization time).
+// a piecewise-flat surface bends (horse, feline and gargoyle at 47k samples, together with the
+// pull 0.05 of LevelOptions::optimize_regularization: +0.12 to +0.16 dB, for about a third more
+// optimization time).
 void surface_points(const Mesh& mesh, double texel_area, std::vector<Vec3d>& pts, std::vector<double>& area) {
   constexpr double points_per_texel = 4.0;
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const Vec3d p0 = mesh.positions[mesh.faces[f][0]], p1 = mesh.positions[mesh.faces[f][1]],
                 p2 = mesh.positions[mesh.faces[f][2]];
     const double ar = isochart::triangle_area(p0, p1, p2);
-    const int n =
-        std::clamp(static_cast<int>(std::ceil(std::sqrt(points_per_texel * ar / texel_area))), 1, 64);
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; i + j < n; ++j)
-        for (int up = 0; up < 2; ++up) {
-          if (up == 1 && i + j + 1 >= n) continue;
-          const double u = up == 0 ? (i + 1.0 / 3) / n : (i + 2.0 / 3) / n;
-          const double v = up == 0 ? (j + 1.0 / 3) / n : (j + 2.0 / 3) / n;
-          pts.push_back(p0 * (1 - u - v) + p1 * u + p2 * v);
-          area.push_back(ar / (n * n));
-        }
+    for_each_subdivision_centroid(points_per_texel * ar / texel_area, [&](double u, double v, int cells) {
+      pts.push_back(p0 * (1 - u - v) + p1 * u + p2 * v);
+      area.push_back(ar / cells);
+    });
   }
 }
 
