@@ -89,45 +89,67 @@ int topology_error(const LevelStats& st) {
 }
 
 // At coarse resolutions a chart of a few texels may cover no triangle of samples and is
-// contracted, which can pinch the remesh. Charts with fewer samples than a small disk needs are
-// then packed larger (their density no longer matches the others, which matters less than a
-// remesh with the wrong topology) until the topology is kept or the attempts run out.
+// contracted, which can pinch the remesh. Charts with fewer samples than a small disk needs, or
+// on a cut path that collapsed, are then packed larger (their density no longer matches the
+// others, which matters less than a remesh with the wrong topology) until the topology is kept
+// or the attempts run out. Two ladders: a gentle one (×1.5 per attempt) first, then a steep one
+// (×4) for starts the gentle one cannot rescue. Whether a level keeps its topology depends on
+// where the sample grid falls on each chart, so more, smaller steps find more of the layouts
+// that work, and they distort the sampling density less: with ×4 alone plane_holes' 64² level
+// kept the wrong topology with charts enlarged up to 64× (37.4 dB), the gentle ladder finds the
+// right one (51.6 dB), and feline's 64² level went from 38.2 to 51.3 dB. Among attempts with the
+// same topology error the least enlarged is kept.
 Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const isochart::Progress& progress) {
   constexpr int kMinSamples = 12;
-  constexpr int kAttempts = 6;
+  struct Ladder {
+    double factor;
+    int attempts;
+  };
+  constexpr Ladder kLadders[] = {{1.5, 13}, {4.0, 5}};
   const int nc = static_cast<int>(a.charts.size());
   auto work_seconds = [](const LevelStats& st) {
     return st.seconds_packing + st.seconds_sampling + st.seconds_zippering + st.seconds_reconstruction +
            st.seconds_optimization;
   };
-  std::vector<double> scale;
-  std::vector<char> strained;
-  Level best = build_once(a, o, scale, strained, progress);
-  int best_error = topology_error(best.stats);
-  double spent = work_seconds(best.stats);
-  std::vector<long long> count(nc, 0);
-  for (int c : best.image.chart)
-    if (c >= 0) ++count[c];
-  for (int attempt = 1; attempt < kAttempts && o.repack && best_error > 0; ++attempt) {
-    if (scale.empty()) scale.assign(nc, 1.0);
-    int enlarged = 0;
-    for (int c = 0; c < nc; ++c)
-      if (count[c] < kMinSamples || strained[c]) {
-        scale[c] *= 4.0;
-        ++enlarged;
-      }
-    if (enlarged == 0) break;
-    Level retry = build_once(a, o, scale, strained, progress);
-    spent += work_seconds(retry.stats);
-    retry.stats.enlarged_charts =
-        static_cast<int>(std::count_if(scale.begin(), scale.end(), [](double x) { return x > 1.0; }));
-    count.assign(nc, 0);
-    for (int c : retry.image.chart)
+  auto count_samples = [nc](const Level& lv) {
+    std::vector<long long> count(nc, 0);
+    for (int c : lv.image.chart)
       if (c >= 0) ++count[c];
-    const int error = topology_error(retry.stats);
-    if (error < best_error) {
-      best_error = error;
-      best = std::move(retry);
+    return count;
+  };
+  std::vector<char> first_strained;
+  Level best = build_once(a, o, {}, first_strained, progress);
+  int best_error = topology_error(best.stats);
+  double best_enlargement = 1;
+  double spent = work_seconds(best.stats);
+  const std::vector<long long> first_count = count_samples(best);
+  for (const Ladder& ladder : kLadders) {
+    if (!o.repack || best_error == 0) break;
+    std::vector<double> scale(nc, 1.0);
+    std::vector<char> strained = first_strained;
+    std::vector<long long> count = first_count;
+    for (int attempt = 0; attempt < ladder.attempts && best_error > 0; ++attempt) {
+      int enlarged = 0;
+      for (int c = 0; c < nc; ++c)
+        if (count[c] < kMinSamples || strained[c]) {
+          scale[c] *= ladder.factor;
+          ++enlarged;
+        }
+      if (enlarged == 0) break;
+      Level retry = build_once(a, o, scale, strained, progress);
+      spent += work_seconds(retry.stats);
+      retry.stats.enlarged_charts =
+          static_cast<int>(std::count_if(scale.begin(), scale.end(), [](double x) { return x > 1.0; }));
+      count = count_samples(retry);
+      const int error = topology_error(retry.stats);
+      // The packer normalizes the total area, so the spread of the scales is what distorts.
+      const double enlargement = *std::max_element(scale.begin(), scale.end()) /
+                                 *std::min_element(scale.begin(), scale.end());
+      if (error < best_error || (error == best_error && enlargement < best_enlargement)) {
+        best_error = error;
+        best_enlargement = enlargement;
+        best = std::move(retry);
+      }
     }
   }
   // Every attempt's time counts, as packing (the attempts differ in their packing).
