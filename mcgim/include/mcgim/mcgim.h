@@ -61,7 +61,8 @@ struct LevelStats {
   int empty_charts = 0;       ///< charts left without a sample at this resolution (contracted)
   /// Charts packed larger than their surface area asks for: when a coarse level's remesh
   /// loses the input's topology (charts too small for a triangle of samples collapse), the
-  /// level is rebuilt with its sparsest charts enlarged, a few times at most.
+  /// level is rebuilt with its sparsest charts enlarged (×1.5 per attempt, up to 13 times,
+  /// then ×4 up to 5 times) until it keeps the topology; the least enlarged of the best is kept.
   int enlarged_charts = 0;
   long long defined_samples = 0;
   long long removed_samples = 0;  ///< covered samples dropped to make each chart a disk
