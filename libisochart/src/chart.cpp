@@ -322,8 +322,11 @@ void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o) {
     p.l2 = metric_l2_stretch(g.positions, g.tris, p.uv, chart_metric(g, *o.face_metric));
     geometric_ok = st.l2 <= o.max_geometric_l2;
   }
-  // The exact overlap test is the expensive part: only charts that meet the bounds need it.
-  if (st.flipped == 0 && p.l2 <= o.max_l2 && st.linf <= o.max_linf && geometric_ok) {
+  // The exact overlap test is the expensive part: only charts that meet the bounds need it,
+  // and most of those are proven one-to-one by their boundary alone (9 % of a bunny atlas's
+  // CPU went to the all-pairs test).
+  if (st.flipped == 0 && p.l2 <= o.max_l2 && st.linf <= o.max_linf && geometric_ok &&
+      !uv_layout_is_embedding(g.tris, p.uv)) {
     std::vector<std::array<Vec2d, 3>> tris(g.tris.size());
     for (size_t f = 0; f < g.tris.size(); ++f)
       for (int k = 0; k < 3; ++k) tris[f][k] = p.uv[g.tris[f][k]];

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 
@@ -218,6 +219,117 @@ std::vector<std::pair<int, int>> overlapping_uv_pairs(const std::vector<std::arr
                                 CGAL::Box_intersection_d::HALF_OPEN);
   std::sort(pairs.begin(), pairs.end());
   return pairs;
+}
+
+bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec2d>& uv) {
+  const int nf = static_cast<int>(tris.size());
+  const int nv = static_cast<int>(uv.size());
+  if (nf == 0) return false;
+  auto point = [&](int v) { return P2(uv[v].x, uv[v].y); };
+  for (const Face& t : tris)
+    for (int k = 0; k < 3; ++k)
+      if (t[k] < 0 || t[k] >= nv || !is_finite(uv[t[k]])) return false;
+  // One strict orientation for all.
+  const CGAL::Orientation sign = CGAL::orientation(point(tris[0][0]), point(tris[0][1]), point(tris[0][2]));
+  if (sign == CGAL::COLLINEAR) return false;
+  for (const Face& t : tris)
+    if (CGAL::orientation(point(t[0]), point(t[1]), point(t[2])) != sign) return false;
+  // Directed edges sorted by undirected key: an interior edge appears twice, in opposite
+  // directions; a boundary edge once.
+  struct Half {
+    std::uint64_t key;
+    int from, to, face;
+  };
+  std::vector<Half> half;
+  half.reserve(static_cast<std::size_t>(nf) * 3);
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int a = tris[f][k], b = tris[f][(k + 1) % 3];
+      if (a == b) return false;
+      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+      half.push_back({key, a, b, f});
+    }
+  std::sort(half.begin(), half.end(), [](const Half& x, const Half& y) {
+    return x.key != y.key ? x.key < y.key : x.face < y.face;
+  });
+  // Faces joined across interior edges must form one component.
+  std::vector<int> parent(nf);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  std::vector<int> next_on_boundary(nv, -1);
+  long long edges = 0, boundary_edges = 0;
+  for (std::size_t i = 0; i < half.size();) {
+    std::size_t j = i + 1;
+    while (j < half.size() && half[j].key == half[i].key) ++j;
+    ++edges;
+    if (j - i == 1) {
+      Half h = half[i];
+      if (next_on_boundary[h.from] >= 0) return false;  // two boundary edges leave one vertex
+      next_on_boundary[h.from] = h.to;
+      ++boundary_edges;
+    } else if (j - i == 2) {
+      if (half[i].from != half[i + 1].to) return false;  // inconsistent orientation
+      parent[find(half[i].face)] = find(half[i + 1].face);
+    } else {
+      return false;  // non-manifold edge
+    }
+    i = j;
+  }
+  for (int f = 1; f < nf; ++f)
+    if (find(f) != find(0)) return false;
+  std::vector<char> used(nv, 0);
+  long long vertices = 0;
+  for (const Face& t : tris)
+    for (int k = 0; k < 3; ++k)
+      if (!used[t[k]]) used[t[k]] = 1, ++vertices;
+  // A connected surface with boundary and Euler characteristic 1 whose boundary is one loop
+  // through vertices with one outgoing boundary edge each is a disk.
+  if (vertices - edges + nf != 1 || boundary_edges < 3) return false;
+  int start = -1;
+  for (int v = 0; v < nv && start < 0; ++v)
+    if (next_on_boundary[v] >= 0) start = v;
+  std::vector<int> loop;
+  loop.reserve(static_cast<std::size_t>(boundary_edges));
+  for (int v = start;;) {
+    loop.push_back(v);
+    v = next_on_boundary[v];
+    if (v < 0) return false;
+    if (v == start) break;
+    if (static_cast<long long>(loop.size()) > boundary_edges) return false;
+  }
+  if (static_cast<long long>(loop.size()) != boundary_edges) return false;
+  // The boundary polygon must be simple: consecutive segments meet only at their shared
+  // vertex (collinear only when going on straight ahead), other pairs not at all.
+  const std::size_t nb = loop.size();
+  for (std::size_t i = 0; i < nb; ++i) {
+    const P2 a = point(loop[i]), b = point(loop[(i + 1) % nb]), c = point(loop[(i + 2) % nb]);
+    if (CGAL::orientation(a, b, c) == CGAL::COLLINEAR && (b == a || b == c || !CGAL::collinear_are_strictly_ordered_along_line(a, b, c)))
+      return false;
+  }
+  using Box = CGAL::Box_intersection_d::Box_with_handle_d<double, 2, std::size_t,
+                                                          CGAL::Box_intersection_d::ID_EXPLICIT>;
+  std::vector<Box> boxes;
+  boxes.reserve(nb);
+  for (std::size_t i = 0; i < nb; ++i) {
+    const Vec2d& a = uv[loop[i]];
+    const Vec2d& b = uv[loop[(i + 1) % nb]];
+    boxes.emplace_back(CGAL::Bbox_2(std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.x, b.x), std::max(a.y, b.y)), i);
+  }
+  bool simple = true;
+  auto check = [&](const Box& x, const Box& y) {
+    if (!simple) return;
+    const std::size_t i = x.handle(), j = y.handle();
+    if ((i + 1) % nb == j || (j + 1) % nb == i) return;  // consecutive: checked above
+    const K::Segment_2 si(point(loop[i]), point(loop[(i + 1) % nb]));
+    const K::Segment_2 sj(point(loop[j]), point(loop[(j + 1) % nb]));
+    if (CGAL::do_intersect(si, sj)) simple = false;
+  };
+  CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), check, std::ptrdiff_t(10),
+                                CGAL::Box_intersection_d::CLOSED);
+  return simple;
 }
 
 std::vector<std::pair<int, int>> overlapping_uv_pairs(const Mesh& mesh, std::size_t max_pairs) {

@@ -2,6 +2,8 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 using namespace isochart;
 
@@ -85,5 +87,90 @@ TEST_CASE("exact UV overlap test", "[stretch][overlap]") {
     const double x = std::nextafter(1.0, 2.0);
     const T b{Vec2d{x, 0}, Vec2d{x + 1, 0}, Vec2d{x, 1}};
     CHECK(overlapping_uv_pairs({a, b}).empty());
+  }
+}
+
+namespace {
+
+// An n×m grid of quads, two counter-clockwise triangles each; vertex (i, j) at index j·(n+1)+i.
+std::vector<Face> grid_faces(int n, int m) {
+  std::vector<Face> f;
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      f.push_back({a, b, c});
+      f.push_back({a, c, d});
+    }
+  return f;
+}
+
+std::vector<std::array<Vec2d, 3>> corner_uvs(const std::vector<Face>& faces, const std::vector<Vec2d>& uv) {
+  std::vector<std::array<Vec2d, 3>> t(faces.size());
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    for (int k = 0; k < 3; ++k) t[f][k] = uv[faces[f][k]];
+  return t;
+}
+
+// The grid's strip bent along an arc of `turns` full turns, radii 1 (row 0) to 2 (row m):
+// every triangle keeps its orientation however far the strip winds.
+std::vector<Vec2d> arc_layout(int n, int m, double turns) {
+  std::vector<Vec2d> uv;
+  for (int j = 0; j <= m; ++j)
+    for (int i = 0; i <= n; ++i) {
+      const double a = -2 * 3.14159265358979323846 * turns * i / n, r = 1 + static_cast<double>(j) / m;
+      uv.push_back({r * std::cos(a), r * std::sin(a)});
+    }
+  return uv;
+}
+
+}  // namespace
+
+TEST_CASE("a chart layout is proven one-to-one from its boundary, or not proven", "[stretch][overlap]") {
+  const std::vector<Face> faces = grid_faces(24, 3);
+  SECTION("a strip bent along three quarters of a turn is proven") {
+    const std::vector<Vec2d> uv = arc_layout(24, 3, 0.75);
+    CHECK(uv_layout_is_embedding(faces, uv));
+    CHECK(overlapping_uv_pairs(corner_uvs(faces, uv)).empty());
+  }
+  SECTION("the same strip wound past a full turn overlaps itself with no flipped triangle") {
+    const std::vector<Vec2d> uv = arc_layout(24, 3, 1.25);
+    CHECK_FALSE(uv_layout_is_embedding(faces, uv));
+    CHECK_FALSE(overlapping_uv_pairs(corner_uvs(faces, uv)).empty());
+  }
+  SECTION("a flipped triangle is not proven") {
+    std::vector<Vec2d> uv = arc_layout(24, 3, 0.5);
+    uv[25 + 5] = uv[25 + 5] * 3.0;  // an interior vertex dragged far outside
+    CHECK_FALSE(uv_layout_is_embedding(faces, uv));
+  }
+  SECTION("a closed ring (two boundary loops) is not a disk") {
+    std::vector<Face> ring = faces;
+    for (Face& f : ring)
+      for (int& v : f)
+        if (v % 25 == 24) v -= 24;  // last column welded to the first
+    const std::vector<Vec2d> uv = arc_layout(24, 3, 1.0);
+    CHECK_FALSE(uv_layout_is_embedding(ring, uv));
+  }
+  SECTION("whenever a jittered grid is proven, the exact all-pairs test agrees") {
+    const std::vector<Face> square = grid_faces(8, 8);
+    std::uint64_t state = 12345;
+    auto uniform = [&] {
+      state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+      return static_cast<double>(state >> 11) / 9007199254740992.0;
+    };
+    int proven = 0, overlapping = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+      const double amount = 0.2 + 1.3 * uniform();
+      std::vector<Vec2d> uv;
+      for (int j = 0; j <= 8; ++j)
+        for (int i = 0; i <= 8; ++i) uv.push_back({i + amount * (uniform() - 0.5), j + amount * (uniform() - 0.5)});
+      const bool overlaps = !overlapping_uv_pairs(corner_uvs(square, uv), 1).empty();
+      const bool is_embedding = uv_layout_is_embedding(square, uv);
+      if (is_embedding) CHECK_FALSE(overlaps);
+      proven += is_embedding ? 1 : 0;
+      overlapping += overlaps ? 1 : 0;
+    }
+    // Both kinds occur, so the agreement above is tested on both sides.
+    CHECK(proven > 30);
+    CHECK(overlapping > 30);
   }
 }

@@ -54,6 +54,15 @@ std::vector<std::pair<int, int>> overlapping_uv_pairs(const std::vector<std::arr
                                                       std::size_t max_pairs = 0);
 std::vector<std::pair<int, int>> overlapping_uv_pairs(const Mesh& mesh, std::size_t max_pairs = 0);
 
+/// True when the UV layout of a chart (triangles indexing `uv`) is proven one-to-one: the
+/// triangles form a topological disk, every triangle has the same strict orientation (exact
+/// predicates) and the boundary polygon is simple. Then every point off the boundary's image
+/// has as many preimages as the boundary winds around it, at most one, so no two interiors
+/// overlap (overlapping_uv_pairs would find none). False means "not proven", not "overlaps":
+/// the caller falls back to overlapping_uv_pairs. Linear in the triangles plus the boundary's
+/// segment intersection test, against the all-pairs box test.
+bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec2d>& uv);
+
 /// Charts of a mesh with per-corner UVs: faces connected through edges whose two sides
 /// share texture coordinates. Returns the chart id per face; `num_charts` receives the count.
 std::vector<int> uv_charts(const Mesh& mesh, int& num_charts);
