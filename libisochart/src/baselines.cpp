@@ -80,6 +80,7 @@ void mirror_if_negative(const std::vector<Face>& faces, std::vector<Vec2d>& uv) 
 }
 
 bool self_overlaps(const std::vector<Face>& faces, const std::vector<Vec2d>& uv) {
+  if (uv_layout_is_embedding(faces, uv)) return false;
   std::vector<std::array<Vec2d, 3>> tris(faces.size());
   for (std::size_t i = 0; i < faces.size(); ++i) tris[i] = {uv[faces[i][0]], uv[faces[i][1]], uv[faces[i][2]]};
   return !overlapping_uv_pairs(tris, 1).empty();

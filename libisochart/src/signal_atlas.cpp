@@ -69,10 +69,12 @@ bool reoptimize(detail::AtlasChart& c, const std::vector<Imt>& metric, const Atl
   optimize_stretch(c.positions, c.tris, uv, opt);
   const StretchStats st = measure_stretch(c.positions, c.tris, uv);
   if (st.flipped > 0 || !(st.linf <= o.max_linf) || !(st.l2 <= max_geometric_l2)) return false;
-  std::vector<std::array<Vec2d, 3>> tris(c.tris.size());
-  for (size_t f = 0; f < c.tris.size(); ++f)
-    for (int k = 0; k < 3; ++k) tris[f][k] = uv[c.tris[f][k]];
-  if (!overlapping_uv_pairs(tris, 1).empty()) return false;
+  if (!uv_layout_is_embedding(c.tris, uv)) {
+    std::vector<std::array<Vec2d, 3>> tris(c.tris.size());
+    for (size_t f = 0; f < c.tris.size(); ++f)
+      for (int k = 0; k < 3; ++k) tris[f][k] = uv[c.tris[f][k]];
+    if (!overlapping_uv_pairs(tris, 1).empty()) return false;
+  }
   c.uv = std::move(uv);
   return true;
 }
