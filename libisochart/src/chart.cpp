@@ -309,7 +309,7 @@ std::vector<std::array<double, 3>> chart_metric(const ChartGeometry& g,
   return m;
 }
 
-void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o) {
+void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o, const Topology* topology) {
   const StretchStats st = measure_stretch(g.positions, g.tris, p.uv);
   p.l2 = st.l2;
   p.geometric_l2 = st.l2;
@@ -326,7 +326,7 @@ void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o) {
   // and most of those are proven one-to-one by their boundary alone (9 % of a bunny atlas's
   // CPU went to the all-pairs test).
   if (st.flipped == 0 && p.l2 <= o.max_l2 && st.linf <= o.max_linf && geometric_ok &&
-      !uv_layout_is_embedding(g.tris, p.uv)) {
+      !(topology ? uv_layout_is_embedding(g.tris, p.uv, *topology) : uv_layout_is_embedding(g.tris, p.uv))) {
     std::vector<std::array<Vec2d, 3>> tris(g.tris.size());
     for (size_t f = 0; f < g.tris.size(); ++f)
       for (int k = 0; k < 3; ++k) tris[f][k] = p.uv[g.tris[f][k]];
@@ -498,7 +498,7 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
     if (worth) optimize_stretch(g.positions, g.tris, p.uv, opt, topo);
     p.optimize_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     seconds += p.optimize_seconds;
-    evaluate(g, p, o);
+    evaluate(g, p, o, &topo);
     return p;
   };
   bool try_lscm = o.lscm_fallback;

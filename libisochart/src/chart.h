@@ -114,7 +114,8 @@ double multiply_covered_fraction(const std::vector<Face>& tris, const std::vecto
 bool lscm(const ChartGeometry& g, std::vector<Vec2d>& uv, const Topology* topo = nullptr);
 
 /// Accepted = disk topology (checked by the caller), no flip, no overlap, both bounds met.
-void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o);
+/// `topology` may pass g's topology to save rebuilding it.
+void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o, const Topology* topology = nullptr);
 
 }  // namespace detail
 }  // namespace isochart

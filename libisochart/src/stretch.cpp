@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 #include <numeric>
 
@@ -221,10 +220,9 @@ std::vector<std::pair<int, int>> overlapping_uv_pairs(const std::vector<std::arr
   return pairs;
 }
 
-bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec2d>& uv) {
-  const int nf = static_cast<int>(tris.size());
+bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec2d>& uv, const Topology& topo) {
   const int nv = static_cast<int>(uv.size());
-  if (nf == 0) return false;
+  if (tris.empty() || topo.num_faces() != static_cast<int>(tris.size())) return false;
   auto point = [&](int v) { return P2(uv[v].x, uv[v].y); };
   for (const Face& t : tris)
     for (int k = 0; k < 3; ++k)
@@ -234,73 +232,22 @@ bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec
   if (sign == CGAL::COLLINEAR) return false;
   for (const Face& t : tris)
     if (CGAL::orientation(point(t[0]), point(t[1]), point(t[2])) != sign) return false;
-  // Directed edges sorted by undirected key: an interior edge appears twice, in opposite
-  // directions; a boundary edge once.
-  struct Half {
-    std::uint64_t key;
-    int from, to, face;
-  };
-  std::vector<Half> half;
-  half.reserve(static_cast<std::size_t>(nf) * 3);
-  for (int f = 0; f < nf; ++f)
+  // A disk: connected, manifold, one boundary loop, χ = 1.
+  if (!topo.is_manifold() || topo.num_components() != 1 || topo.boundary_loops().size() != 1 ||
+      topo.euler_characteristic() != 1)
+    return false;
+  // Consistently oriented: the two faces of an interior edge run along it in opposite
+  // directions (otherwise both lie on one side of it and the degree argument fails).
+  std::vector<signed char> along(topo.num_edges(), 0);
+  for (int f = 0; f < topo.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) {
-      const int a = tris[f][k], b = tris[f][(k + 1) % 3];
-      if (a == b) return false;
-      const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
-      half.push_back({key, a, b, f});
+      const int e = topo.face_edge(f, k);
+      along[e] += tris[f][k] == topo.edge(e).v0 ? 1 : -1;
     }
-  std::sort(half.begin(), half.end(), [](const Half& x, const Half& y) {
-    return x.key != y.key ? x.key < y.key : x.face < y.face;
-  });
-  // Faces joined across interior edges must form one component.
-  std::vector<int> parent(nf);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  std::vector<int> next_on_boundary(nv, -1);
-  long long edges = 0, boundary_edges = 0;
-  for (std::size_t i = 0; i < half.size();) {
-    std::size_t j = i + 1;
-    while (j < half.size() && half[j].key == half[i].key) ++j;
-    ++edges;
-    if (j - i == 1) {
-      Half h = half[i];
-      if (next_on_boundary[h.from] >= 0) return false;  // two boundary edges leave one vertex
-      next_on_boundary[h.from] = h.to;
-      ++boundary_edges;
-    } else if (j - i == 2) {
-      if (half[i].from != half[i + 1].to) return false;  // inconsistent orientation
-      parent[find(half[i].face)] = find(half[i + 1].face);
-    } else {
-      return false;  // non-manifold edge
-    }
-    i = j;
-  }
-  for (int f = 1; f < nf; ++f)
-    if (find(f) != find(0)) return false;
-  std::vector<char> used(nv, 0);
-  long long vertices = 0;
-  for (const Face& t : tris)
-    for (int k = 0; k < 3; ++k)
-      if (!used[t[k]]) used[t[k]] = 1, ++vertices;
-  // A connected surface with boundary and Euler characteristic 1 whose boundary is one loop
-  // through vertices with one outgoing boundary edge each is a disk.
-  if (vertices - edges + nf != 1 || boundary_edges < 3) return false;
-  int start = -1;
-  for (int v = 0; v < nv && start < 0; ++v)
-    if (next_on_boundary[v] >= 0) start = v;
-  std::vector<int> loop;
-  loop.reserve(static_cast<std::size_t>(boundary_edges));
-  for (int v = start;;) {
-    loop.push_back(v);
-    v = next_on_boundary[v];
-    if (v < 0) return false;
-    if (v == start) break;
-    if (static_cast<long long>(loop.size()) > boundary_edges) return false;
-  }
-  if (static_cast<long long>(loop.size()) != boundary_edges) return false;
+  for (int e = 0; e < topo.num_edges(); ++e)
+    if (topo.edge_faces(e).size() == 2 && along[e] != 0) return false;
+  const std::vector<int>& loop = topo.boundary_loops()[0];
+  if (loop.size() < 3) return false;
   // The boundary polygon must be simple: consecutive segments meet only at their shared
   // vertex (collinear only when going on straight ahead), other pairs not at all.
   const std::size_t nb = loop.size();
@@ -330,6 +277,10 @@ bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec
   CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), check, std::ptrdiff_t(10),
                                 CGAL::Box_intersection_d::CLOSED);
   return simple;
+}
+
+bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec2d>& uv) {
+  return uv_layout_is_embedding(tris, uv, Topology(tris, static_cast<int>(uv.size())));
 }
 
 std::vector<std::pair<int, int>> overlapping_uv_pairs(const Mesh& mesh, std::size_t max_pairs) {

@@ -126,7 +126,6 @@ void surface_points(const Mesh& mesh, double texel_area, std::vector<Vec3d>& pts
     const Vec3d p0 = mesh.positions[mesh.faces[f][0]], p1 = mesh.positions[mesh.faces[f][1]],
                 p2 = mesh.positions[mesh.faces[f][2]];
     const double ar = isochart::triangle_area(p0, p1, p2);
-    const double want = points_per_texel * ar / texel_area;
     if (coarse_points_per_texel * ar < texel_area) {
       pending += ar;
       if (pending * coarse_points_per_texel < texel_area) continue;
@@ -135,7 +134,7 @@ void surface_points(const Mesh& mesh, double texel_area, std::vector<Vec3d>& pts
       pending = 0;
       continue;
     }
-    for_each_subdivision_centroid(want, [&](double u, double v, int cells) {
+    for_each_subdivision_centroid(points_per_texel * ar / texel_area, [&](double u, double v, int cells) {
       pts.push_back(p0 * (1 - u - v) + p1 * u + p2 * v);
       area.push_back(ar / cells);
     });

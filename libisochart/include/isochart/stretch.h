@@ -59,8 +59,10 @@ std::vector<std::pair<int, int>> overlapping_uv_pairs(const Mesh& mesh, std::siz
 /// predicates) and the boundary polygon is simple. Then every point off the boundary's image
 /// has as many preimages as the boundary winds around it, at most one, so no two interiors
 /// overlap (overlapping_uv_pairs would find none). False means "not proven", not "overlaps":
-/// the caller falls back to overlapping_uv_pairs. Costs a sort of the edges and a segment
-/// intersection test of the boundary only, against the all-pairs test of every triangle.
+/// the caller falls back to overlapping_uv_pairs. Costs a pass over the triangles and a
+/// segment intersection test of the boundary only, against the all-pairs test of every
+/// triangle. `topo` is the triangles' connectivity when the caller has it.
+bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec2d>& uv, const Topology& topo);
 bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec2d>& uv);
 
 /// Charts of a mesh with per-corner UVs: faces connected through edges whose two sides
