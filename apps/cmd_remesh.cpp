@@ -30,6 +30,7 @@ struct RemeshArgs {
   std::string exr, png;
   bool no_optimize = false;
   int fit_passes = mcgim::LevelOptions{}.geometric_iterations;
+  bool shorter_diagonals = false;
   long long psnr_samples = 1'000'000;
   bool no_psnr = false;
   std::string signal;
@@ -116,6 +117,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   mcgim::LevelOptions lo;
   lo.optimize = !a.no_optimize;
   lo.geometric_iterations = a.fit_passes;
+  lo.fit_diagonals = !a.shorter_diagonals;
   lo.keep_chart_sizes = a.keep_chart_sizes || !a.signal.empty();
   std::vector<std::array<int, 2>> sizes;
   nlohmann::json search;
@@ -252,9 +254,12 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--atlas", args->atlas, "Use this atlas (a mesh with texture coordinates) instead of "
                                           "building the iso-chart atlas of the input");
   sub->add_option("--exr", args->exr, "Write each level as PREFIX_WxH.exr (float positions, normals, "
-                                      "defined mask, chart and group ids)");
+                                      "defined mask, chart and group ids, block diagonals)");
   sub->add_option("--png", args->png, "Write a normal-map preview of each level as PREFIX_WxH.png");
   sub->add_flag("--no-optimize", args->no_optimize, "Keep the zippered sample positions (no fitting)");
+  sub->add_flag("--shorter-diagonals", args->shorter_diagonals,
+                "Split every 2x2 block along its shorter diagonal (default: the one closer to the input "
+                "surface, chosen by the fit)");
   sub->add_option("--fit-passes", args->fit_passes,
                   "Closest-point fitting passes of the samples to the surface (more: higher PSNR, slower)")
       ->check(CLI::Range(0, 20))

@@ -9,14 +9,16 @@ namespace mcgim {
 
 void write_exr(const GeometryImage& im, const std::string& path) {
   const int W = im.width, H = im.height;
-  const int nch = 9;
+  const int nch = 10;
   isochart::Image out(W, H, nch);
-  out.channel_names = {"R", "G", "B", "N.X", "N.Y", "N.Z", "defined", "chart", "group"};
+  out.channel_names = {"R", "G", "B", "N.X", "N.Y", "N.Z", "defined", "chart", "group", "diagonal"};
   std::string mirrored;
   for (char m : im.chart_mirrored) mirrored += m ? '1' : '0';
   out.attributes = {{"compression", "zip"},
                     {"isocharts:kind", "multi-chart geometry image"},
-                    {"isocharts:chart_mirrored", mirrored}};
+                    {"isocharts:chart_mirrored", mirrored},
+                    {"isocharts:diagonal", "per 2x2 block at its lower-left sample: 1 splits (x+1,y)-(x,y+1), "
+                                           "0 splits (x,y)-(x+1,y+1), -1 the shorter one"}};
   std::vector<float>& px = out.pixels;
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
@@ -32,6 +34,7 @@ void write_exr(const GeometryImage& im, const std::string& path) {
       p[6] = def ? 1.0f : 0.0f;
       p[7] = static_cast<float>(im.chart[i]);
       p[8] = static_cast<float>(def ? im.group[i] : -1);
+      p[9] = im.block_diagonal.empty() ? -1.0f : static_cast<float>(im.block_diagonal[i]);
     }
   isochart::write_image(path, out);
 }

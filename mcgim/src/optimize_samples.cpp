@@ -169,7 +169,7 @@ std::vector<FitPoint> closest_points(const ClosestPoints& original, const std::v
 
 // Least squares: Σ area·|Σ w_i x_i − target|² + λ Σ |x_v − anchor_v|², then each vertex kept
 // within `max_move` of its anchor; writes the positions back to the image and rebuilds the
-// remesh (the shorter diagonals may change).
+// remesh (the shorter diagonals may change, where the image has not fixed them).
 void solve(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& group_anchor, double lambda,
            double max_move, GeometryImage& im, Remesh& r) {
   const int nv = r.mesh.num_vertices();
@@ -217,6 +217,40 @@ void solve(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& group_anc
   r = reconstruct(im);
 }
 
+// Per full block, the diagonal whose two triangles lie closer to the original surface (squared
+// distances of the diagonal's midpoint and the two triangles' centroids). The shorter diagonal
+// bridges concave creases that the other one follows (the horse's tail joint). With
+// `interior_only`, blocks touching a zippered sample keep the shorter one: their diagonal is
+// an edge the neighbouring chart may also use.
+void choose_diagonals(const ClosestPoints& original, bool interior_only, GeometryImage& im) {
+  const int W = im.width, H = im.height;
+  im.block_diagonal.assign(static_cast<std::size_t>(W) * H, 0);
+  std::vector<int> group_size(im.num_groups, 0);
+  for (int g : im.group)
+    if (g >= 0) ++group_size[g];
+  tbb::parallel_for(0, H - 1, [&](int y) {
+    for (int x = 0; x + 1 < W; ++x) {
+      const int c[4] = {im.index(x, y), im.index(x + 1, y), im.index(x + 1, y + 1), im.index(x, y + 1)};
+      if (!im.defined(c[0]) || !im.defined(c[1]) || !im.defined(c[2]) || !im.defined(c[3])) continue;
+      if (interior_only &&
+          (group_size[im.group[c[0]]] > 1 || group_size[im.group[c[1]]] > 1 || group_size[im.group[c[2]]] > 1 ||
+           group_size[im.group[c[3]]] > 1))
+        continue;
+      const Vec3d p[4] = {im.positions[c[0]], im.positions[c[1]], im.positions[c[2]], im.positions[c[3]]};
+      auto d2 = [&](const Vec3d& q) { return squared_norm(original.closest(q).point - q); };
+      const double e02 = d2((p[0] + p[2]) * 0.5) + d2((p[0] + p[1] + p[2]) / 3.0) + d2((p[0] + p[2] + p[3]) / 3.0);
+      const double e13 = d2((p[1] + p[3]) * 0.5) + d2((p[0] + p[1] + p[3]) / 3.0) + d2((p[1] + p[2] + p[3]) / 3.0);
+      im.block_diagonal[c[0]] = e13 < e02 ? 1 : 0;
+    }
+  });
+}
+
+bool same_topology(const TopologyCheck& a, const TopologyCheck& b) {
+  return a.boundary_edges == b.boundary_edges && a.nonmanifold_edges == b.nonmanifold_edges &&
+         a.nonmanifold_vertices == b.nonmanifold_vertices && a.boundary_loops == b.boundary_loops &&
+         a.components == b.components && a.euler_characteristic == b.euler_characteristic;
+}
+
 }  // namespace
 
 void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vector<Vec2d>& param,
@@ -255,11 +289,34 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
     std::vector<Vec3d> pts;
     std::vector<double> area;
     surface_points(*a.mesh, texel_area, pts, area);
+    // Fitted diagonals may not change the topology the shorter ones gave: where choosing them
+    // on seam blocks too does, only interior blocks get them (for the rest of this level).
+    const bool diagonals = o.fit_diagonals && !original.empty();
+    bool interior_only = false;
+    const auto pick_diagonals = [&] {
+      const TopologyCheck before = check_topology(r.mesh);
+      GeometryImage::Diagonals kept = im.block_diagonal;
+      for (;;) {
+        choose_diagonals(original, interior_only, im);
+        Remesh next = reconstruct(im);
+        if (same_topology(before, check_topology(next.mesh))) {
+          r = std::move(next);
+          return;
+        }
+        if (interior_only) {
+          im.block_diagonal = std::move(kept);
+          return;
+        }
+        interior_only = true;
+      }
+    };
     for (int it = 0; it < o.geometric_iterations && !original.empty(); ++it) {
       isochart::report(progress, isochart::Stage::Optimization,
                        static_cast<double>(o.optimize_iterations + it) / passes);
+      if (diagonals) pick_diagonals();
       solve(closest_points(original, pts, area, r), group_anchor, lambda, max_move, im, r);
     }
+    if (diagonals && o.geometric_iterations > 0) pick_diagonals();
   }
   isochart::report(progress, isochart::Stage::Optimization, 1.0);
 }

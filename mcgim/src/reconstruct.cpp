@@ -68,11 +68,15 @@ Remesh reconstruct(const GeometryImage& im) {
       std::array<int, 3> t[2];
       int nt = 0;
       if (n == 4) {
-        // The shorter diagonal after zippering; a diagonal whose ends were welded has length 0,
-        // so both triangles collapse instead of folding onto each other.
+        // The shorter diagonal after zippering, unless the fit chose one; a diagonal whose ends
+        // were welded has length 0 and is always taken, so both triangles collapse instead of
+        // folding onto each other.
         const double d02 = squared_norm(im.positions[c[0]] - im.positions[c[2]]);
         const double d13 = squared_norm(im.positions[c[1]] - im.positions[c[3]]);
-        if (d02 <= d13) {
+        bool use02 = d02 <= d13;
+        if (!im.block_diagonal.empty() && im.group[c[0]] != im.group[c[2]] && im.group[c[1]] != im.group[c[3]])
+          use02 = im.block_diagonal[c[0]] == 0;
+        if (use02) {
           t[0] = {c[0], c[1], c[2]};
           t[1] = {c[0], c[2], c[3]};
         } else {

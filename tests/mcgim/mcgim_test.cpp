@@ -166,6 +166,40 @@ TEST_CASE("sample optimization brings the remesh closer to the surface", "[mcgim
   }
 }
 
+TEST_CASE("fitted diagonals follow the surface closer than the shorter ones", "[mcgim]") {
+  // A coarse, faceted sphere: its edges are creases the sample grid crosses at every angle.
+  const isochart::Mesh m = mcgim_test::sphere_atlas(8, 14);
+  DistanceOptions d;
+  d.samples = 50000;
+  for (int res : {40, 64}) {
+    LevelOptions shorter = keep_layout(res);
+    shorter.fit_diagonals = false;
+    const Level a = build_level(m, shorter), b = build_level(m, keep_layout(res));
+    check_watertight(a, 2);
+    check_watertight(b, 2);
+    CHECK(a.image.block_diagonal.empty());
+    REQUIRE(b.image.block_diagonal.size() == b.image.chart.size());
+    // Some blocks take the longer diagonal, and the image says which: rebuilding it gives the
+    // same mesh.
+    int longer = 0;
+    for (int y = 0; y + 1 < res; ++y)
+      for (int x = 0; x + 1 < res; ++x) {
+        const GeometryImage& im = b.image;
+        const int c[4] = {im.index(x, y), im.index(x + 1, y), im.index(x + 1, y + 1), im.index(x, y + 1)};
+        if (!im.defined(c[0]) || !im.defined(c[1]) || !im.defined(c[2]) || !im.defined(c[3])) continue;
+        const double d02 = squared_norm(im.positions[c[0]] - im.positions[c[2]]);
+        const double d13 = squared_norm(im.positions[c[1]] - im.positions[c[3]]);
+        if ((im.block_diagonal[c[0]] == 1) != (d13 < d02)) ++longer;
+      }
+    CHECK(longer > 0);
+    const Remesh again = reconstruct(b.image);
+    CHECK(again.mesh.faces == b.remesh.mesh.faces);
+    const double pa = measure_distance(m, a.remesh.mesh, d).psnr, pb = measure_distance(m, b.remesh.mesh, d).psnr;
+    INFO(res << ": shorter diagonals " << pa << " dB, fitted " << pb << " dB, " << longer << " longer");
+    CHECK(pb > pa + 0.3);
+  }
+}
+
 TEST_CASE("levels are deterministic and independent of the thread count", "[mcgim]") {
   const isochart::Mesh m = mcgim_test::torus_atlas(40, 20);
   auto run = [&](int threads) {
@@ -229,15 +263,18 @@ TEST_CASE("geometry images are written as EXR and PNG", "[mcgim][io]") {
   const isochart::Image in = isochart::read_image(exr);
   CHECK(in.width == 32);
   CHECK(in.height == 32);
-  REQUIRE(in.channels == 9);
-  REQUIRE(in.channel_names.size() == 9);
+  REQUIRE(in.channels == 10);
+  REQUIRE(in.channel_names.size() == 10);
   // EXR keeps channels sorted by name: look them up.
   auto channel = [&](const std::string& name) {
     for (int c = 0; c < in.channels; ++c)
       if (in.channel_names[c] == name) return c;
     return -1;
   };
-  const int cx = channel("R"), cdef = channel("defined"), cchart = channel("chart"), cgroup = channel("group");
+  const int cx = channel("R"), cdef = channel("defined"), cchart = channel("chart"), cgroup = channel("group"),
+            cdiag = channel("diagonal");
+  REQUIRE(cdiag >= 0);
+  REQUIRE(lv.image.block_diagonal.size() == lv.image.chart.size());
   REQUIRE(cx >= 0);
   REQUIRE(cdef >= 0);
   REQUIRE(cchart >= 0);
@@ -248,8 +285,9 @@ TEST_CASE("geometry images are written as EXR and PNG", "[mcgim][io]") {
   for (int y = 0; y < 32; ++y)
     for (int x = 0; x < 32; ++x) {
       const int i = lv.image.index(x, y);
-      const float* p = &px[((31 - y) * 32 + x) * 9];  // file rows run top down
+      const float* p = &px[((31 - y) * 32 + x) * 10];  // file rows run top down
       if (p[cdef] != (lv.image.defined(i) ? 1.0f : 0.0f) || p[cchart] != float(lv.image.chart[i]) ||
+          p[cdiag] != float(lv.image.block_diagonal[i]) ||
           p[cx] != float(lv.image.positions[i].x) || p[cgroup] != float(lv.image.defined(i) ? lv.image.group[i] : -1))
         ++mismatches;
     }

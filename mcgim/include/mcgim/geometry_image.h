@@ -35,6 +35,10 @@ struct GeometryImage {
   /// Per chart: its texture layout is mirrored (faces clockwise in texture space). Only an
   /// atlas used with its own layout can have mirrored charts; re-packed charts never are.
   std::vector<char> chart_mirrored;
+  /// Per 2×2 block (indexed by its lower-left sample), the diagonal chosen by the sample fit:
+  /// 1 splits along (x+1, y)–(x, y+1), 0 along (x, y)–(x+1, y+1). Empty: the shorter one.
+  using Diagonals = std::vector<char>;
+  Diagonals block_diagonal;
 
   int index(int x, int y) const { return y * width + x; }
   bool defined(int i) const { return chart[i] >= 0; }
@@ -58,7 +62,8 @@ struct Remesh {
 };
 
 /// Rebuilds the mesh (Sander et al. 2003 §3): each 2×2 block with 4 defined samples gives two
-/// triangles split along the shorter 3-D diagonal, a block with 3 gives one, then samples are
+/// triangles split along the shorter 3-D diagonal (or the one `block_diagonal` names, unless
+/// that diagonal's ends were welded), a block with 3 gives one, then samples are
 /// welded by group and triangles whose corners fall into fewer than 3 groups are dropped, as
 /// are pockets (see Remesh::pocket_faces). Zero-area triangles are kept (they are what makes
 /// zippered seams watertight) and counted: a triangle counts as zero-area when its height is

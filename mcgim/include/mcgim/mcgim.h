@@ -42,8 +42,12 @@ struct LevelOptions {
   int optimize_iterations = 1;
   /// Geometric passes after those: original points matched to their closest remesh points and
   /// remesh face centroids to their closest original points (exact, about 0.3 s per pass per
-  /// 50k samples on 2 cores). Each pass re-picks the shorter diagonals.
+  /// 50k samples on 2 cores). Each pass re-picks the diagonals.
   int geometric_iterations = 2;
+  /// With the geometric passes: split each 2×2 block along the diagonal whose triangles lie
+  /// closer to the original surface instead of the shorter one (kept in the image's
+  /// block_diagonal, so the image still defines the remesh), wherever that keeps the topology.
+  bool fit_diagonals = true;
   /// Weight of the pull towards the sampled positions, relative to the fit, per unit of
   /// texel area. Small values fit harder; it keeps samples without data in place. 0.05 rather
   /// than harder fits: the closest-point matches are re-made only once per pass, and a
