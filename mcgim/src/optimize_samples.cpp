@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "closest_point.h"
@@ -219,30 +220,71 @@ void solve(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& group_anc
 
 // Per full block, the diagonal whose two triangles lie closer to the original surface (squared
 // distances of the diagonal's midpoint and the two triangles' centroids). The shorter diagonal
-// bridges concave creases that the other one follows (the horse's tail joint). With
-// `interior_only`, blocks touching a zippered sample keep the shorter one: their diagonal is
-// an edge the neighbouring chart may also use.
-void choose_diagonals(const ClosestPoints& original, bool interior_only, GeometryImage& im) {
+// bridges concave creases and saddles that the other one follows (the horse's tail joint). A
+// block changes its diagonal only when the new one is not already an edge of the remesh `r`
+// (built with the current diagonals) nor the new diagonal of another block: zippered samples
+// are shared, so a seam block's diagonal can be an edge of the neighbouring chart, and using
+// it twice would make it non-manifold. With `interior_only`, blocks touching a zippered sample
+// keep their diagonal.
+void choose_diagonals(const ClosestPoints& original, const Remesh& r, bool interior_only, GeometryImage& im) {
   const int W = im.width, H = im.height;
-  im.block_diagonal.assign(static_cast<std::size_t>(W) * H, 0);
   std::vector<int> group_size(im.num_groups, 0);
   for (int g : im.group)
     if (g >= 0) ++group_size[g];
+  const auto edge_key = [](int a, int b) {
+    if (a > b) std::swap(a, b);
+    return (static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b);
+  };
+  std::vector<std::uint64_t> edges;
+  edges.reserve(r.mesh.faces.size() * 3);
+  for (const Face& f : r.mesh.faces)
+    for (int k = 0; k < 3; ++k) edges.push_back(edge_key(f[k], f[(k + 1) % 3]));
+  std::sort(edges.begin(), edges.end());
+  const auto is_edge = [&](std::uint64_t e) { return std::binary_search(edges.begin(), edges.end(), e); };
+
+  // The diagonal each block has now: the image's choice or, without one, the shorter.
+  const auto current = [&](const int c[4]) -> char {
+    if (!im.block_diagonal.empty()) return im.block_diagonal[c[0]];
+    return squared_norm(im.positions[c[1]] - im.positions[c[3]]) < squared_norm(im.positions[c[0]] - im.positions[c[2]]);
+  };
+  GeometryImage::Diagonals next(static_cast<std::size_t>(W) * H, 0);
+  // Per row, the blocks that change and their new edge; merged in row order.
+  std::vector<std::vector<std::pair<std::uint64_t, int>>> changed(std::max(H - 1, 0));
   tbb::parallel_for(0, H - 1, [&](int y) {
     for (int x = 0; x + 1 < W; ++x) {
       const int c[4] = {im.index(x, y), im.index(x + 1, y), im.index(x + 1, y + 1), im.index(x, y + 1)};
       if (!im.defined(c[0]) || !im.defined(c[1]) || !im.defined(c[2]) || !im.defined(c[3])) continue;
-      if (interior_only &&
-          (group_size[im.group[c[0]]] > 1 || group_size[im.group[c[1]]] > 1 || group_size[im.group[c[2]]] > 1 ||
-           group_size[im.group[c[3]]] > 1))
+      const char cur = current(c);
+      next[c[0]] = cur;
+      const int g[4] = {im.group[c[0]], im.group[c[1]], im.group[c[2]], im.group[c[3]]};
+      if (g[0] == g[2] || g[1] == g[3]) continue;  // welded: reconstruct takes that diagonal
+      if (interior_only && (group_size[g[0]] > 1 || group_size[g[1]] > 1 || group_size[g[2]] > 1 || group_size[g[3]] > 1))
         continue;
       const Vec3d p[4] = {im.positions[c[0]], im.positions[c[1]], im.positions[c[2]], im.positions[c[3]]};
       auto d2 = [&](const Vec3d& q) { return squared_norm(original.closest(q).point - q); };
       const double e02 = d2((p[0] + p[2]) * 0.5) + d2((p[0] + p[1] + p[2]) / 3.0) + d2((p[0] + p[2] + p[3]) / 3.0);
       const double e13 = d2((p[1] + p[3]) * 0.5) + d2((p[0] + p[1] + p[3]) / 3.0) + d2((p[1] + p[2] + p[3]) / 3.0);
-      im.block_diagonal[c[0]] = e13 < e02 ? 1 : 0;
+      const char want = e13 < e02 ? 1 : 0;
+      if (want == cur) continue;
+      const int a = r.sample_vertex[want ? c[1] : c[0]], b = r.sample_vertex[want ? c[3] : c[2]];
+      if (a < 0 || b < 0) continue;
+      const std::uint64_t e = edge_key(a, b);
+      if (is_edge(e)) continue;
+      next[c[0]] = want;
+      changed[y].emplace_back(e, c[0]);
     }
   });
+  std::vector<std::pair<std::uint64_t, int>> all;
+  for (const auto& row : changed) all.insert(all.end(), row.begin(), row.end());
+  std::sort(all.begin(), all.end());
+  for (std::size_t i = 0; i < all.size();) {
+    std::size_t j = i + 1;
+    while (j < all.size() && all[j].first == all[i].first) ++j;
+    if (j - i > 1)
+      for (std::size_t k = i; k < j; ++k) next[all[k].second] ^= 1;  // two blocks want one new edge: neither
+    i = j;
+  }
+  im.block_diagonal = std::move(next);
 }
 
 bool same_topology(const TopologyCheck& a, const TopologyCheck& b) {
@@ -289,22 +331,33 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
     std::vector<Vec3d> pts;
     std::vector<double> area;
     surface_points(*a.mesh, texel_area, pts, area);
-    // Fitted diagonals may not change the topology the shorter ones gave: where choosing them
-    // on seam blocks too does, only interior blocks get them (for the rest of this level).
+    // Fitted diagonals may not take the remesh further from the input's topology, nor change
+    // its figures at the same distance; they may bring it closer (at coarse levels, where the
+    // zippered seams are short, the old diagonals sometimes used an edge twice). Should the
+    // edge test of choose_diagonals miss a case (pockets, pieces touching at a vertex), only
+    // interior blocks get new diagonals for the rest of this level, and failing that the old
+    // ones are kept.
+    const auto distance = [&](const TopologyCheck& t) {
+      return t.nonmanifold_edges + t.nonmanifold_vertices + std::abs(t.euler_characteristic - a.input_euler) +
+             std::abs(t.boundary_loops - a.input_boundary_loops);
+    };
     const bool diagonals = o.fit_diagonals && !original.empty();
     bool interior_only = false;
     const auto pick_diagonals = [&] {
       const TopologyCheck before = check_topology(r.mesh);
-      GeometryImage::Diagonals kept = im.block_diagonal;
+      const GeometryImage::Diagonals kept = im.block_diagonal;
       for (;;) {
-        choose_diagonals(original, interior_only, im);
+        im.block_diagonal = kept;
+        choose_diagonals(original, r, interior_only, im);
         Remesh next = reconstruct(im);
-        if (same_topology(before, check_topology(next.mesh))) {
+        const TopologyCheck after = check_topology(next.mesh);
+        if (distance(after) < distance(before) ||
+            (distance(after) == distance(before) && same_topology(before, after))) {
           r = std::move(next);
           return;
         }
         if (interior_only) {
-          im.block_diagonal = std::move(kept);
+          im.block_diagonal = kept;
           return;
         }
         interior_only = true;
