@@ -46,7 +46,9 @@ struct LevelOptions {
   int geometric_iterations = 2;
   /// With the geometric passes: split each 2×2 block along the diagonal whose triangles lie
   /// closer to the original surface instead of the shorter one (kept in the image's
-  /// block_diagonal, so the image still defines the remesh), wherever that keeps the topology.
+  /// block_diagonal, so the image still defines the remesh). A block keeps its diagonal when
+  /// the other one is already an edge of the remesh; the choice is dropped if it would take the
+  /// remesh further from the input's topology.
   bool fit_diagonals = true;
   /// Weight of the pull towards the sampled positions, relative to the fit, per unit of
   /// texel area. Small values fit harder; it keeps samples without data in place. 0.05 rather
