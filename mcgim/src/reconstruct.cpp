@@ -35,6 +35,9 @@ Remesh reconstruct(const GeometryImage& im) {
       im.group.size() != N)
     throw isochart::InputError("", "geometry image arrays do not match its size " +
                                        std::to_string(W) + "x" + std::to_string(H));
+  if (!im.block_diagonal.empty() && im.block_diagonal.size() != N)
+    throw isochart::InputError("", "geometry image block diagonals (" + std::to_string(im.block_diagonal.size()) +
+                                       ") do not match its size " + std::to_string(W) + "x" + std::to_string(H));
   std::vector<int> group_sample(im.num_groups, -1);
   for (std::size_t i = 0; i < N; ++i) {
     if (!im.defined(static_cast<int>(i))) continue;

@@ -200,6 +200,9 @@ TEST_CASE("fitted diagonals follow the surface closer than the shorter ones", "[
     CHECK(longer_on_seams > 0);
     const Remesh again = reconstruct(b.image);
     CHECK(again.mesh.faces == b.remesh.mesh.faces);
+    GeometryImage bad = b.image;
+    bad.block_diagonal.resize(5);
+    CHECK_THROWS_AS(reconstruct(bad), isochart::InputError);
     const double pa = measure_distance(m, a.remesh.mesh, d).psnr, pb = measure_distance(m, b.remesh.mesh, d).psnr;
     INFO(res << ": shorter diagonals " << pa << " dB, fitted " << pb << " dB, " << longer << " longer ("
              << longer_on_seams << " on seams)");
