@@ -82,10 +82,7 @@ Level build_once(const detail::AtlasCharts& a, const LevelOptions& o, const std:
 
 // How far a remesh is from the input's topology; 0 when it is kept.
 int topology_error(const LevelStats& st) {
-  const TopologyCheck& t = st.topology;
-  return t.nonmanifold_edges + t.nonmanifold_vertices +
-         std::abs(t.euler_characteristic - st.input_euler_characteristic) +
-         std::abs(t.boundary_loops - st.input_boundary_loops);
+  return topology_distance(st.topology, st.input_euler_characteristic, st.input_boundary_loops);
 }
 
 // At coarse resolutions a chart of a few texels may cover no triangle of samples and is

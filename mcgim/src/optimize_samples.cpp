@@ -242,11 +242,6 @@ void choose_diagonals(const ClosestPoints& original, const Remesh& r, bool inter
   std::sort(edges.begin(), edges.end());
   const auto is_edge = [&](std::uint64_t e) { return std::binary_search(edges.begin(), edges.end(), e); };
 
-  // The diagonal each block has now: the image's choice or, without one, the shorter.
-  const auto current = [&](const int c[4]) -> char {
-    if (!im.block_diagonal.empty()) return im.block_diagonal[c[0]];
-    return squared_norm(im.positions[c[1]] - im.positions[c[3]]) < squared_norm(im.positions[c[0]] - im.positions[c[2]]);
-  };
   GeometryImage::Diagonals next(static_cast<std::size_t>(W) * H, 0);
   // Per row, the blocks that change and their new edge; merged in row order.
   std::vector<std::vector<std::pair<std::uint64_t, int>>> changed(std::max(H - 1, 0));
@@ -254,7 +249,7 @@ void choose_diagonals(const ClosestPoints& original, const Remesh& r, bool inter
     for (int x = 0; x + 1 < W; ++x) {
       const int c[4] = {im.index(x, y), im.index(x + 1, y), im.index(x + 1, y + 1), im.index(x, y + 1)};
       if (!im.defined(c[0]) || !im.defined(c[1]) || !im.defined(c[2]) || !im.defined(c[3])) continue;
-      const char cur = current(c);
+      const char cur = im.splits_13(c[0]);  // the diagonal the block has now
       next[c[0]] = cur;
       const int g[4] = {im.group[c[0]], im.group[c[1]], im.group[c[2]], im.group[c[3]]};
       if (g[0] == g[2] || g[1] == g[3]) continue;  // welded: reconstruct takes that diagonal
@@ -338,8 +333,7 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
     // interior blocks get new diagonals for the rest of this level, and failing that the old
     // ones are kept.
     const auto distance = [&](const TopologyCheck& t) {
-      return t.nonmanifold_edges + t.nonmanifold_vertices + std::abs(t.euler_characteristic - a.input_euler) +
-             std::abs(t.boundary_loops - a.input_boundary_loops);
+      return topology_distance(t, a.input_euler, a.input_boundary_loops);
     };
     const bool diagonals = o.fit_diagonals && !original.empty();
     bool interior_only = false;

@@ -15,7 +15,8 @@ namespace mcgim::detail {
 // positions minimize Σ area·|remesh point − original point|² + a pull towards their current
 // position. `remesh` is rebuilt after each pass (the shorter diagonals may change). With
 // options.fit_diagonals, each closest-point pass first splits the blocks along the diagonal
-// closer to the original surface (image.block_diagonal), where the topology stays the same.
+// closer to the original surface (image.block_diagonal), unless that takes the remesh further
+// from the input's topology.
 void optimize_samples(const AtlasCharts& atlas, const Placement& placement, const std::vector<Vec2d>& param,
                       const LevelOptions& options, GeometryImage& image, Remesh& remesh,
                       const isochart::Progress& progress);

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <array>
+#include <cstdlib>
 #include <string>
 
 #include "isochart/error.h"
@@ -23,6 +24,20 @@ bool is_degenerate(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
 }
 
 }  // namespace
+
+bool GeometryImage::splits_13(int i) const {
+  const int c[4] = {i, i + 1, i + 1 + width, i + width};
+  // A diagonal whose ends were welded has length 0, so the shorter one takes it and both
+  // triangles collapse instead of folding onto each other.
+  if (!block_diagonal.empty() && group[c[0]] != group[c[2]] && group[c[1]] != group[c[3]])
+    return block_diagonal[i] != 0;
+  return squared_norm(positions[c[1]] - positions[c[3]]) < squared_norm(positions[c[0]] - positions[c[2]]);
+}
+
+int topology_distance(const TopologyCheck& t, int euler_characteristic, int boundary_loops) {
+  return t.nonmanifold_edges + t.nonmanifold_vertices + std::abs(t.euler_characteristic - euler_characteristic) +
+         std::abs(t.boundary_loops - boundary_loops);
+}
 
 int GeometryImage::defined_samples() const {
   return static_cast<int>(std::count_if(chart.begin(), chart.end(), [](int c) { return c >= 0; }));
@@ -71,14 +86,8 @@ Remesh reconstruct(const GeometryImage& im) {
       std::array<int, 3> t[2];
       int nt = 0;
       if (n == 4) {
-        // The shorter diagonal after zippering, unless the fit chose one; a diagonal whose ends
-        // were welded has length 0 and is always taken, so both triangles collapse instead of
-        // folding onto each other.
-        const double d02 = squared_norm(im.positions[c[0]] - im.positions[c[2]]);
-        const double d13 = squared_norm(im.positions[c[1]] - im.positions[c[3]]);
-        bool use02 = d02 <= d13;
-        if (!im.block_diagonal.empty() && im.group[c[0]] != im.group[c[2]] && im.group[c[1]] != im.group[c[3]])
-          use02 = im.block_diagonal[c[0]] == 0;
+        // Sander et al.'s shorter diagonal after zippering, unless the fit chose one.
+        const bool use02 = !im.splits_13(c[0]);
         if (use02) {
           t[0] = {c[0], c[1], c[2]};
           t[1] = {c[0], c[2], c[3]};

@@ -42,6 +42,9 @@ struct GeometryImage {
 
   int index(int x, int y) const { return y * width + x; }
   bool defined(int i) const { return chart[i] >= 0; }
+  /// Whether reconstruct splits the full block at lower-left sample i along (x+1, y)–(x, y+1):
+  /// block_diagonal's choice unless a diagonal's ends were welded, else the shorter one.
+  bool splits_13(int i) const;
   int defined_samples() const;
 };
 
@@ -88,5 +91,9 @@ struct TopologyCheck {
   bool manifold() const { return nonmanifold_edges == 0 && nonmanifold_vertices == 0; }
 };
 TopologyCheck check_topology(const isochart::Mesh& mesh);
+
+/// How far a mesh is from the topology of a surface with that Euler characteristic and number
+/// of boundary loops: non-manifold edges and vertices plus the differences; 0 when it has it.
+int topology_distance(const TopologyCheck& t, int euler_characteristic, int boundary_loops);
 
 }  // namespace mcgim
