@@ -31,6 +31,7 @@ struct SynthArgs {
   int coarse_neighborhood = 3;
   int full_passes = -1;     // -1: the library's default
   int start_passes = -1;    // -1: the library's default
+  int rigid_copy = -1;      // -1: automatic
   double coherence = -1;    // < 0: the library's default
   int start_samples = -1;   // -1: the library's default
   int start_level = -1;     // -1: automatic
@@ -92,6 +93,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   so.coarse_neighborhood = a.coarse_neighborhood;
   if (a.full_passes >= 0) so.full_passes = a.full_passes;
   if (a.start_passes >= 0) so.coarsest_passes = a.start_passes;
+  so.rigid_copy_rounds = a.rigid_copy;
   if (a.coherence >= 0) so.coherence = a.coherence;
   if (a.start_samples >= 0) so.min_level_samples = a.start_samples;
   if (a.start_level < -1) bad_option("--start-level takes a pyramid index (0 = finest) or -1 (automatic)");
@@ -137,6 +139,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   j["correlation_length"] = r.correlation_length;
   j["coarse_footprint"] = r.coarse_footprint;
   j["smoothness"] = r.smoothness;
+  j["copy_scale_off"] = r.copy_scale_off;
   nlohmann::json jl = nlohmann::json::array();
   for (const auto& l : r.levels)
     jl.push_back({{"resolution", {l.width, l.height}},
@@ -197,6 +200,10 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--start-passes", args->start_passes,
                   "Non-causal passes on the first synthesized level after its exemplar copy (default 2)")
       ->check(CLI::Range(0, 10));
+  sub->add_option("--rigid-copy", args->rigid_copy,
+                  "Rounds of the as-rigid-as-possible fit of the first level's exemplar copy (keeps the "
+                  "exemplar's scale, lets directions drift; default -1: 10 with a 4-direction field, else 0)")
+      ->check(CLI::Range(-1, 100));
   sub->add_option("--coherence", args->coherence,
                   "How much better (relative neighbourhood distance) a match elsewhere in the exemplar must be "
                   "than continuing a neighbour's patch (default 0.1)")

@@ -177,14 +177,21 @@ Vec2d field_offset(const mcgim::GeometryImage& g, const LevelGeometry& geo, doub
 // fit spreads it as a slow bend. Pairs whose frames disagree (the cut around the N-direction
 // field's singularities) are left out. A weak pull toward the breadth-first coordinates fixes
 // each component's translation.
-void relax_exemplar_coords(const mcgim::GeometryImage& g, const LevelGeometry& geo, double spacing,
-                           std::vector<Vec2d>& coord, const std::vector<char>& reached) {
+// Returns the fraction of the fitted pairs whose copy offset is more than 1.3× longer or shorter
+// than the field's (where the copy magnifies or shrinks the exemplar).
+double relax_exemplar_coords(const mcgim::GeometryImage& g, const LevelGeometry& geo, double spacing,
+                             std::vector<Vec2d>& coord, const std::vector<char>& reached, int rigid_rounds) {
   const int groups = g.num_groups;
   std::vector<int> rep(groups, -1);
   for (int s = 0; s < g.width * g.height; ++s)
     if (g.defined(s) && reached[s] && rep[g.group[s]] < 0) rep[g.group[s]] = s;
   std::vector<Eigen::Triplet<double>> trip;
   Eigen::VectorXd bx = Eigen::VectorXd::Zero(groups), by = Eigen::VectorXd::Zero(groups);
+  struct Pair {
+    int s, t;
+    Vec2d d;
+  };
+  std::vector<Pair> pairs;
   // Far below the smallest non-zero eigenvalue of the grid Laplacian (~1e-4 for 200 samples
   // across, ~1e-5 for 1000), so that only the translation is held.
   const double anchor = 1e-7;
@@ -215,15 +222,57 @@ void relax_exemplar_coords(const mcgim::GeometryImage& g, const LevelGeometry& g
         trip.emplace_back(gt, gs, -1.0);
         bx[gs] -= d.x, bx[gt] += d.x;
         by[gs] -= d.y, by[gt] += d.y;
+        pairs.push_back({gs, gt, d});
       }
     }
+  Eigen::VectorXd ax = bx, ay = by;  // the anchors' share of the right-hand side
+  for (const Pair& p : pairs) {
+    ax[p.s] += p.d.x, ax[p.t] -= p.d.x;
+    ay[p.s] += p.d.y, ay[p.t] -= p.d.y;
+  }
   Eigen::SparseMatrix<double> a(groups, groups);
   a.setFromTriplets(trip.begin(), trip.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
   if (solver.info() != Eigen::Success) throw isochart::Error("synth: exemplar-copy factorization failed");
-  const Eigen::VectorXd cx = solver.solve(bx), cy = solver.solve(by);
+  Eigen::VectorXd cx = solver.solve(bx), cy = solver.solve(by);
+  // As rigid as possible (local/global, Sorkine & Alexa 2007): offsets that do not close (the
+  // field turns on a curved surface) are shortened by the plain fit, which magnifies the
+  // exemplar there; turning each sample's offsets by the rotation that best matches its
+  // neighbours' keeps the exemplar's scale, at the price of directions drifting from the field.
+  std::vector<double> sum_dot, sum_cross;
+  std::vector<Vec2d> turn;
+  for (int round = 0; round < rigid_rounds; ++round) {
+    sum_dot.assign(groups, 0.0);
+    sum_cross.assign(groups, 0.0);
+    for (const Pair& p : pairs) {
+      const Vec2d e{cx[p.t] - cx[p.s], cy[p.t] - cy[p.s]};
+      const double dt = p.d.x * e.x + p.d.y * e.y, cr = p.d.x * e.y - p.d.y * e.x;
+      sum_dot[p.s] += dt, sum_dot[p.t] += dt;
+      sum_cross[p.s] += cr, sum_cross[p.t] += cr;
+    }
+    turn.assign(groups, Vec2d{1, 0});
+    for (int gi = 0; gi < groups; ++gi) {
+      const double r = std::hypot(sum_dot[gi], sum_cross[gi]);
+      if (r > 0) turn[gi] = {sum_dot[gi] / r, sum_cross[gi] / r};
+    }
+    Eigen::VectorXd rx = ax, ry = ay;
+    for (const Pair& p : pairs) {
+      const double c = 0.5 * (turn[p.s].x + turn[p.t].x), sn = 0.5 * (turn[p.s].y + turn[p.t].y);
+      const Vec2d d{c * p.d.x - sn * p.d.y, sn * p.d.x + c * p.d.y};
+      rx[p.s] -= d.x, rx[p.t] += d.x;
+      ry[p.s] -= d.y, ry[p.t] += d.y;
+    }
+    cx = solver.solve(rx);
+    cy = solver.solve(ry);
+  }
   for (int s = 0; s < g.width * g.height; ++s)
     if (g.defined(s) && reached[s]) coord[s] = {cx[g.group[s]], cy[g.group[s]]};
+  long long off = 0;
+  for (const Pair& p : pairs) {
+    const double want = std::hypot(p.d.x, p.d.y), got = std::hypot(cx[p.t] - cx[p.s], cy[p.t] - cy[p.s]);
+    if (got > 1.3 * want || 1.3 * got < want) ++off;
+  }
+  return pairs.empty() ? 0.0 : static_cast<double>(off) / static_cast<double>(pairs.size());
 }
 
 }  // namespace
@@ -461,7 +510,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   if (o.coarse_neighborhood < 1 || o.coarse_neighborhood % 2 == 0)
     throw isochart::InputError("", "coarse neighborhood must be odd and at least 1");
   if (o.first_pass_batch < 1 || o.full_passes < 0 || o.coarsest_passes < 0 || o.candidates < 1 || o.pca_dims < 1 ||
-      o.k_coherence < 0)
+      o.k_coherence < 0 || o.rigid_copy_rounds < -1)
     throw isochart::InputError("", "synthesis passes, batches, candidates and PCA dimensions must be positive");
   if (!(o.coherence >= 0) || !std::isfinite(o.coherence))
     throw isochart::InputError("", "coherence bias must be a non-negative number");
@@ -797,7 +846,8 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
       // keep the breadth-first copy. 300 conjugate-gradient steps from it instead left long
       // wavy smears on bunny at 1024² (663k samples), worse than the copy itself.
       if (o.relax_copy && groups <= o.relax_copy_max)
-        relax_exemplar_coords(g, geo[l], spacing, coord, reached);
+        res.copy_scale_off = relax_exemplar_coords(g, geo[l], spacing, coord, reached,
+                              o.rigid_copy_rounds >= 0 ? o.rigid_copy_rounds : (sym >= 4 ? 10 : 0));
       for (int gi = 0; gi < groups; ++gi) {
         const int s = reps[l][gi];
         if (s < 0 || !reached[s]) continue;

@@ -520,3 +520,30 @@ TEST_CASE("the first level's exemplar copy spreads the field's curl instead of s
   // Levels above the fit's size limit keep the breadth-first copy.
   CHECK(over_limit == tree);
 }
+
+TEST_CASE("the rigid copy keeps the exemplar's scale where the field does not close", "[synth]") {
+  // On a sphere the least-squares copy shortens the field's offsets (it keeps only their
+  // curl-free part), magnifying the exemplar; turning each sample's offsets to fit its
+  // neighbours keeps their length.
+  const isochart::Mesh atlas = mcgim_test::sphere_atlas(48, 96);
+  const auto pyramid = cube_pyramid(atlas, {{96, 96}, {48, 48}});
+  const Image ex = synth::make_exemplar("cells", 128);
+  auto run = [&](int rounds) {
+    synth::SynthOptions so;
+    so.pixels_per_texel = 1;
+    so.direction_symmetry = 4;
+    so.start_level = 0;
+    so.coarsest_passes = 0;
+    so.rigid_copy_rounds = rounds;
+    return synth::synthesize(atlas, pyramid, ex, so);
+  };
+  const synth::SynthResult plain = run(0), rigid = run(10), automatic = run(-1);
+  WARN("copy pairs off scale by > 1.3x: plain " << plain.copy_scale_off << ", rigid " << rigid.copy_scale_off);
+  CHECK(plain.copy_scale_off > 0.05);
+  CHECK(rigid.copy_scale_off < 0.5 * plain.copy_scale_off);
+  // A 4-direction field gets the rigid copy by default.
+  CHECK(automatic.exemplar_pixels == rigid.exemplar_pixels);
+  synth::SynthOptions bad;
+  bad.rigid_copy_rounds = -2;
+  CHECK_THROWS_AS(synth::synthesize(atlas, pyramid, ex, bad), isochart::InputError);
+}

@@ -53,6 +53,11 @@ struct SynthOptions {
   /// The fit (a sparse factorization) is made up to this many samples (zipper groups) of the
   /// first level; larger levels keep the breadth-first copy.
   int relax_copy_max = 1'100'000;
+  /// Rounds of the as-rigid-as-possible fit of the copy (each sample's field offsets turned to
+  /// match its neighbours', which keeps the exemplar's scale where the field does not close).
+  /// −1: automatic, 10 when the direction field has 4-fold symmetry (the exemplar looks alike
+  /// turned, so the drift from the field does not show), else 0.
+  int rigid_copy_rounds = -1;
   /// Coherence bias (Hertzmann et al. 2001's κ): a kd-tree candidate must be this much better
   /// (relative distance) than the best coherent one to be chosen. 0: no preference.
   double coherence = 0.1;
@@ -132,6 +137,10 @@ struct SynthResult {
   double coarse_footprint = 0;
   /// exemplar_smoothness at one finest texel, which the automatic start compared too.
   double smoothness = 0;
+  /// Fraction of the first synthesized level's neighbour pairs whose offset in the fitted
+  /// exemplar copy is more than 1.3× longer or shorter than the direction field's offset (the
+  /// copy magnifies or shrinks the exemplar there). 0 when the copy is not fitted.
+  double copy_scale_off = 0;
   /// Mean over finest-level samples of the squared distance between the final neighbourhood
   /// and its best exemplar match, per valid component, divided by the exemplar's variance
   /// (0 = every neighbourhood occurs in the exemplar; about 2 for unrelated noise).
