@@ -89,15 +89,15 @@ def main():
         det = "bunny + cells_161, seed 5: --threads 1 vs 2 outputs (glb, obj, png; atlas and MCGIM) %s" % (
             "byte-identical" if same else "DIFFER")
 
-    lines = ["| mesh | exemplar | charts | start level | field N | seam error | match error | texel-scale spread "
-             "| synthesis s | total s |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = ["| mesh | exemplar | charts | start level | field N | copy off scale | seam error | match error "
+             "| texel-scale spread | synthesis s | total s |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
     for mesh_name, ex_name, j, wall, _ in rows:
         se = j["seam_error"]
         start = j.get("start_level")
         level = "%d²" % j["levels"][start]["resolution"][0] if start is not None else "?"
-        lines.append("| %s | %s | %d | %s | %s | %s | %.3f | %.3f | %.1f | %.1f |" % (
-            mesh_name, ex_name, j["charts"], level, j.get("direction_symmetry", "?"),
+        lines.append("| %s | %s | %d | %s | %s | %.3f | %s | %.3f | %.3f | %.1f | %.1f |" % (
+            mesh_name, ex_name, j["charts"], level, j.get("direction_symmetry", "?"), j.get("copy_scale_off", 0),
             "n/a" if se is None else "%.3f" % se, j["match_error"],
             j["texel_scale_spread"], j["seconds_breakdown"]["synthesis"], j["seconds"]))
     text = "\n".join(lines) + "\n"
