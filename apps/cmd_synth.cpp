@@ -32,6 +32,7 @@ struct SynthArgs {
   int full_passes = -1;     // -1: the library's default
   int start_passes = -1;    // -1: the library's default
   int rigid_copy = -1;      // -1: automatic
+  bool colour_transfer = false;
   double coherence = -1;    // < 0: the library's default
   int start_samples = -1;   // -1: the library's default
   int start_level = -1;     // -1: automatic
@@ -103,7 +104,8 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   const synth::SynthResult r = synth::synthesize(atlas, pyramid, exemplar, so, ctx.progress());
 
   const auto tt = std::chrono::steady_clock::now();
-  const isochart::Image atlas_tex = synth::transfer_to_atlas(atlas, pyramid[0], r.texture, a.atlas_size);
+  const isochart::Image atlas_tex = synth::transfer_to_atlas(atlas, pyramid[0], r.texture, a.atlas_size,
+                                                               a.colour_transfer ? nullptr : &r, &exemplar);
   const double seconds_transfer = seconds_since(tt);
 
   // Outputs: STEM.{glb,obj,png} (the input mesh on its atlas) and STEM_mcgim.{glb,obj,png}.
@@ -200,6 +202,9 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--start-passes", args->start_passes,
                   "Non-causal passes on the first synthesized level after its exemplar copy (default 2)")
       ->check(CLI::Range(0, 10));
+  sub->add_flag("--colour-transfer", args->colour_transfer,
+                "Atlas texture from the finest samples' colours, interpolated (default: each texel reads the "
+                "exemplar where its nearest samples' exemplar positions continue)");
   sub->add_option("--rigid-copy", args->rigid_copy,
                   "Rounds of the as-rigid-as-possible fit of the first level's exemplar copy (keeps the "
                   "exemplar's scale, lets directions drift; default -1: 10 with a 4-direction field, else 0)")

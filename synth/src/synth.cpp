@@ -986,6 +986,41 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   }
 
   res.exemplar_pixels = sources[0];
+  {
+    // The exemplar's continuation around each finest sample, for transfer_to_atlas: image
+    // steps to the chart's neighbours as surface offsets, in the sample's field frame (the
+    // convention of the copy and of the coherent candidates: +t1 → +x, +t2 → −y).
+    const mcgim::GeometryImage& g = pyramid[0].image;
+    const double spacing = ex[0].actual_factor / res.scale;
+    res.exemplar_jacobians.assign(static_cast<std::size_t>(g.width) * g.height, {0.f, 0.f, 0.f, 0.f});
+    tbb::parallel_for(0, g.height, [&](int y) {
+      for (int x = 0; x < g.width; ++x) {
+        const int s = g.index(x, y);
+        if (!g.defined(s)) continue;
+        auto step = [&](int dx, int dy, Vec3d& w) {
+          int found = 0;
+          w = Vec3d{0, 0, 0};
+          for (int sign : {1, -1}) {
+            const int qx = x + sign * dx, qy = y + sign * dy;
+            if (qx < 0 || qy < 0 || qx >= g.width || qy >= g.height) continue;
+            const int t = g.index(qx, qy);
+            if (!g.defined(t) || g.chart[t] != g.chart[s]) continue;
+            w += (g.positions[t] - g.positions[s]) * static_cast<double>(sign);
+            ++found;
+          }
+          if (found > 0) w /= static_cast<double>(found);
+          return found > 0;
+        };
+        Vec3d wx, wy;
+        if (!step(1, 0, wx) || !step(0, 1, wy)) continue;
+        const Vec3d t1 = geo[0].t1(s), t2 = geo[0].t2(s);
+        res.exemplar_jacobians[s] = {static_cast<float>(isochart::dot(t1, wx) / spacing),
+                                     static_cast<float>(isochart::dot(t1, wy) / spacing),
+                                     static_cast<float>(-isochart::dot(t2, wx) / spacing),
+                                     static_cast<float>(-isochart::dot(t2, wy) / spacing)};
+      }
+    });
+  }
   // Seam error and texel-scale spread on the finest level.
   {
     const mcgim::GeometryImage& g = pyramid[0].image;
@@ -1041,10 +1076,19 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   return res;
 }
 
-Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, const Image& texture, int size) {
+Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, const Image& texture, int size,
+                        const SynthResult* synthesis, const Image* exemplar) {
   if (size < 2 || size > 16384) throw isochart::InputError("", "atlas texture size must be in 2..16384");
   if (!atlas.has_uvs()) throw isochart::InputError("", "the atlas has no texture coordinates");
   const mcgim::GeometryImage& g = level.image;
+  const bool magnify = synthesis && exemplar;
+  if (magnify) {
+    const auto ns = static_cast<std::size_t>(g.width) * g.height;
+    if (synthesis->exemplar_jacobians.size() != ns || synthesis->levels.empty() ||
+        synthesis->exemplar_pixels.size() != static_cast<std::size_t>(g.num_groups) ||
+        synthesis->levels[0].exemplar_width < 1 || exemplar->channels != 3 || exemplar->width < 1)
+      throw isochart::InputError("", "transfer: the synthesis result does not belong to this level");
+  }
   const int nf = atlas.num_faces();
   // Per image chart, the affine map atlas uv → image xy, least squares over its samples.
   std::vector<Eigen::Matrix3d> ata(g.num_charts, Eigen::Matrix3d::Zero());
@@ -1101,6 +1145,99 @@ Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, 
   Image out(size, size, 3);
   std::vector<char> filled(static_cast<std::size_t>(size) * size, 0);
   auto tex = [&](int s, int c) { return texture.at(s % g.width, g.height - 1 - s / g.width, c); };
+
+  // Exemplar lookups: the original exemplar prefiltered to about one pixel per atlas texel
+  // (the median over charts of finest-level exemplar pixels per atlas texel), so that the
+  // atlas gets the detail its resolution holds and no aliasing.
+  ExemplarLevel look;
+  double level_to_look = 1;  // finest-exemplar-level pixels → lookup pixels
+  int ex_w = 1;
+  if (magnify) {
+    std::vector<double> per_texel;
+    for (int c = 0; c < g.num_charts; ++c)
+      if (fitted[c]) per_texel.push_back(std::sqrt(std::fabs(affine[c].topLeftCorner<2, 2>().determinant())) / size);
+    std::sort(per_texel.begin(), per_texel.end());
+    const double samples_per_texel = per_texel.empty() ? 1.0 : per_texel[per_texel.size() / 2];
+    const double f0 = synthesis->levels[0].exemplar_factor > 0 ? synthesis->levels[0].exemplar_factor : 1.0;
+    // Jacobians map sample steps to finest-level pixels, which are f0 original pixels each.
+    double jac = 0;
+    long long nj = 0;
+    for (const auto& j : synthesis->exemplar_jacobians)
+      if (j[0] != 0 || j[1] != 0 || j[2] != 0 || j[3] != 0) jac += std::sqrt(std::fabs(double(j[0]) * j[3] - double(j[1]) * j[2])), ++nj;
+    const double level_px_per_sample = nj > 0 ? jac / nj : 1.0;
+    look = resample_exemplar(*exemplar, std::max(1.0, f0 * level_px_per_sample * samples_per_texel));
+    level_to_look = f0 / look.actual_factor;
+    ex_w = synthesis->levels[0].exemplar_width;
+  }
+  auto mirror = [](int i, int n) {
+    const int period = 2 * n;
+    i %= period;
+    if (i < 0) i += period;
+    return i < n ? i : period - 1 - i;
+  };
+  // Bilinear exemplar colour at lookup-image position (u, v), pixel centres at +0.5.
+  auto read = [&](double u, double v, double* rgb) {
+    const double fu = u - 0.5, fv = v - 0.5;
+    const double iu = std::floor(fu), iv = std::floor(fv);
+    if (!(std::fabs(iu) < 1e8 && std::fabs(iv) < 1e8)) return false;
+    const double au = fu - iu, av = fv - iv;
+    const int x0 = static_cast<int>(iu), y0 = static_cast<int>(iv);
+    const int xs[2] = {mirror(x0, look.image.width), mirror(x0 + 1, look.image.width)};
+    const int ys[2] = {mirror(y0, look.image.height), mirror(y0 + 1, look.image.height)};
+    for (int c = 0; c < 3; ++c)
+      rgb[c] = (1 - av) * ((1 - au) * look.image.at(xs[0], ys[0], c) + au * look.image.at(xs[1], ys[0], c)) +
+               av * ((1 - au) * look.image.at(xs[0], ys[1], c) + au * look.image.at(xs[1], ys[1], c));
+    return true;
+  };
+  // The exemplar position of sample s continued to image position (px, py), in finest-level
+  // exemplar pixels; false when the sample has none.
+  auto continued = [&](int s, double px, double py, double& ex, double& ey) {
+    const int src = magnify ? synthesis->exemplar_pixels[g.group[s]] : -1;
+    if (src < 0) return false;
+    const auto& j = synthesis->exemplar_jacobians[s];
+    const double dx = px - (s % g.width + 0.5), dy = py - (s / g.width + 0.5);
+    ex = src % ex_w + 0.5 + j[0] * dx + j[1] * dy;
+    ey = src / ex_w + 0.5 + j[2] * dx + j[3] * dy;
+    return std::isfinite(ex) && std::isfinite(ey);
+  };
+  // Colour at image position (px, py) from up to four samples with weights: samples whose
+  // continued positions agree (within a pixel) with the heaviest one's continue one patch and
+  // are read once at their weighted mean position, which keeps the patch sharp; the others are
+  // read on their own and blended by weight.
+  auto blend = [&](const int* smp, const double* wgt, int n, double px, double py, double* v) {
+    double qx[4], qy[4];
+    bool has[4];
+    int lead = -1;
+    for (int k = 0; k < n; ++k) {
+      has[k] = continued(smp[k], px, py, qx[k], qy[k]);
+      if (has[k] && (lead < 0 || wgt[k] > wgt[lead])) lead = k;
+    }
+    double total = 0, mx = 0, my = 0, mw = 0;
+    v[0] = v[1] = v[2] = 0;
+    for (int k = 0; k < n; ++k) {
+      double rgb[3];
+      if (has[k] && std::fabs(qx[k] - qx[lead]) <= 1 && std::fabs(qy[k] - qy[lead]) <= 1) {
+        mx += wgt[k] * qx[k], my += wgt[k] * qy[k], mw += wgt[k];
+        total += wgt[k];
+        continue;
+      }
+      if (!(has[k] && read(qx[k] * level_to_look, qy[k] * level_to_look, rgb)))
+        for (int c = 0; c < 3; ++c) rgb[c] = tex(smp[k], c);
+      for (int c = 0; c < 3; ++c) v[c] += wgt[k] * rgb[c];
+      total += wgt[k];
+    }
+    if (mw > 0) {
+      double rgb[3];
+      if (read(mx / mw * level_to_look, my / mw * level_to_look, rgb)) {
+        for (int c = 0; c < 3; ++c) v[c] += mw * rgb[c];
+      } else {
+        for (int k = 0; k < n; ++k)
+          if (has[k] && std::fabs(qx[k] - qx[lead]) <= 1 && std::fabs(qy[k] - qy[lead]) <= 1)
+            for (int c = 0; c < 3; ++c) v[c] += wgt[k] * tex(smp[k], c);
+      }
+    }
+    return total;
+  };
   for (int f = 0; f < nf; ++f) {
     const int c = face_chart[f];
     if (c < 0 || !fitted[c]) continue;
@@ -1128,14 +1265,16 @@ Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, 
         const int ix = static_cast<int>(std::floor(fx)), iy = static_cast<int>(std::floor(fy));
         const double ax = fx - ix, ay = fy - iy;
         double v[3] = {0, 0, 0}, wsum = 0;
+        int smp[4], n = 0;
+        double wts[4];
         for (int k = 0; k < 4; ++k) {
           const int sx = ix + (k & 1), sy = iy + (k >> 1);
           if (sx < 0 || sy < 0 || sx >= g.width || sy >= g.height || g.chart[g.index(sx, sy)] != c) continue;
           const double wgt = ((k & 1) ? ax : 1 - ax) * ((k >> 1) ? ay : 1 - ay);
           if (wgt <= 0) continue;
-          for (int ch = 0; ch < 3; ++ch) v[ch] += wgt * tex(g.index(sx, sy), ch);
-          wsum += wgt;
+          smp[n] = g.index(sx, sy), wts[n] = wgt, ++n;
         }
+        if (n > 0) wsum = blend(smp, wts, n, xy.x(), xy.y(), v);
         if (wsum <= 0) {
           // Outside the chart's samples (its boundary): the nearest sample of the chart.
           const int cx = static_cast<int>(std::lround(fx)), cy = static_cast<int>(std::lround(fy));
@@ -1147,8 +1286,9 @@ Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, 
                 const double d = (sx - fx) * (sx - fx) + (sy - fy) * (sy - fy);
                 if (d < best) {
                   best = d;
-                  for (int ch = 0; ch < 3; ++ch) v[ch] = tex(g.index(sx, sy), ch);
-                  wsum = 1;
+                  const int one = g.index(sx, sy);
+                  const double w1 = 1;
+                  wsum = blend(&one, &w1, 1, xy.x(), xy.y(), v);
                 }
               }
         }

@@ -126,6 +126,11 @@ struct SynthResult {
   /// Per finest-level zipper group: the pixel (y·w + x, w = levels[0].exemplar_width) of the
   /// finest exemplar level its colour was copied from, −1 when none (a sample without data).
   std::vector<int> exemplar_pixels;
+  /// Per finest-level sample (y·width + x): how the exemplar continues around it, the 2×2 map
+  /// from an image offset (dx, dy) in samples to finest-exemplar-level pixels (row-major:
+  /// ∂x/∂dx, ∂x/∂dy, ∂y/∂dx, ∂y/∂dy) in the direction field's frame at the sample; zero
+  /// where the sample has no neighbour in its chart.
+  std::vector<std::array<float, 4>> exemplar_jacobians;
   double scale = 0;  ///< exemplar pixels per unit of surface length actually used
   int start_level = 0;  ///< pyramid index synthesis started at (see SynthOptions::start_level)
   /// Symmetry N of the direction field used (see SynthOptions::direction_symmetry).
@@ -166,8 +171,19 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
 /// texture coordinates: a `size`×`size` RGB image (row 0 = top) for `atlas`'s uvs. Each chart's
 /// MCGIM layout is an affine image of its atlas layout, fitted from the samples; texels outside
 /// every chart take the nearest covered texel's colour so that mipmaps do not bleed.
+///
+/// With `synthesis` (the result of synthesize on `level`'s pyramid) and its `exemplar` (the
+/// original RGB image), each texel reads the exemplar instead of interpolating the samples'
+/// colours: it continues the exemplar position of each of its (up to four) nearest samples by
+/// its offset from them (SynthResult::exemplar_jacobians), looks the exemplar up there
+/// (bilinear, mirrored at its edges, prefiltered to the atlas's texel size) and blends the
+/// four by their bilinear weights. Where neighbouring samples continue one patch this draws the
+/// exemplar itself at the atlas's resolution, without the samples' rounding to whole exemplar
+/// pixels; samples without an exemplar position keep their colour.
 isochart::Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level,
-                                  const isochart::Image& texture, int size);
+                                  const isochart::Image& texture, int size,
+                                  const SynthResult* synthesis = nullptr,
+                                  const isochart::Image* exemplar = nullptr);
 
 /// Per-vertex unit tangent directions of `mesh`: `direction` (or the x axis when zero, the
 /// y axis where x is nearly normal) projected into each tangent plane. When `direction` is
