@@ -207,7 +207,7 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
                 "exemplar where its nearest samples' exemplar positions continue)");
   sub->add_option("--rigid-copy", args->rigid_copy,
                   "Rounds of the as-rigid-as-possible fit of the first level's exemplar copy (keeps the "
-                  "exemplar's scale, lets directions drift; default -1: 10 with a 4-direction field, else 0)")
+                  "exemplar's scale, lets directions drift; default -1: 20 with a 4-direction field, else 0)")
       ->check(CLI::Range(-1, 100));
   sub->add_option("--coherence", args->coherence,
                   "How much better (relative neighbourhood distance) a match elsewhere in the exemplar must be "

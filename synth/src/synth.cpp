@@ -847,7 +847,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
       // wavy smears on bunny at 1024² (663k samples), worse than the copy itself.
       if (o.relax_copy && groups <= o.relax_copy_max)
         res.copy_scale_off = relax_exemplar_coords(g, geo[l], spacing, coord, reached,
-                              o.rigid_copy_rounds >= 0 ? o.rigid_copy_rounds : (sym >= 4 ? 10 : 0));
+                              o.rigid_copy_rounds >= 0 ? o.rigid_copy_rounds : (sym >= 4 ? 20 : 0));
       for (int gi = 0; gi < groups; ++gi) {
         const int s = reps[l][gi];
         if (s < 0 || !reached[s]) continue;

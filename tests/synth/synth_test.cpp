@@ -537,7 +537,7 @@ TEST_CASE("the rigid copy keeps the exemplar's scale where the field does not cl
     so.rigid_copy_rounds = rounds;
     return synth::synthesize(atlas, pyramid, ex, so);
   };
-  const synth::SynthResult plain = run(0), rigid = run(10), automatic = run(-1);
+  const synth::SynthResult plain = run(0), rigid = run(20), automatic = run(-1);
   WARN("copy pairs off scale by > 1.3x: plain " << plain.copy_scale_off << ", rigid " << rigid.copy_scale_off);
   CHECK(plain.copy_scale_off > 0.05);
   CHECK(rigid.copy_scale_off < 0.5 * plain.copy_scale_off);

@@ -55,7 +55,7 @@ struct SynthOptions {
   int relax_copy_max = 1'100'000;
   /// Rounds of the as-rigid-as-possible fit of the copy (each sample's field offsets turned to
   /// match its neighbours', which keeps the exemplar's scale where the field does not close).
-  /// −1: automatic, 10 when the direction field has 4-fold symmetry (the exemplar looks alike
+  /// −1: automatic, 20 when the direction field has 4-fold symmetry (the exemplar looks alike
   /// turned, so the drift from the field does not show), else 0.
   int rigid_copy_rounds = -1;
   /// Coherence bias (Hertzmann et al. 2001's κ): a kd-tree candidate must be this much better
