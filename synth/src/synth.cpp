@@ -510,8 +510,10 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   if (o.coarse_neighborhood < 1 || o.coarse_neighborhood % 2 == 0)
     throw isochart::InputError("", "coarse neighborhood must be odd and at least 1");
   if (o.first_pass_batch < 1 || o.full_passes < 0 || o.coarsest_passes < 0 || o.candidates < 1 || o.pca_dims < 1 ||
-      o.k_coherence < 0 || o.rigid_copy_rounds < -1)
+      o.k_coherence < 0)
     throw isochart::InputError("", "synthesis passes, batches, candidates and PCA dimensions must be positive");
+  if (o.rigid_copy_rounds < -1)
+    throw isochart::InputError("", "rigid copy rounds must be -1 (automatic) or at least 0");
   if (!(o.coherence >= 0) || !std::isfinite(o.coherence))
     throw isochart::InputError("", "coherence bias must be a non-negative number");
   if (!(o.scale >= 0) || !std::isfinite(o.scale)) throw isochart::InputError("", "scale must be positive");
