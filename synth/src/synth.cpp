@@ -220,21 +220,31 @@ double relax_exemplar_coords(const mcgim::GeometryImage& g, const LevelGeometry&
         trip.emplace_back(gt, gt, 1.0);
         trip.emplace_back(gs, gt, -1.0);
         trip.emplace_back(gt, gs, -1.0);
-        bx[gs] -= d.x, bx[gt] += d.x;
-        by[gs] -= d.y, by[gt] += d.y;
         pairs.push_back({gs, gt, d});
       }
     }
-  Eigen::VectorXd ax = bx, ay = by;  // the anchors' share of the right-hand side
-  for (const Pair& p : pairs) {
-    ax[p.s] += p.d.x, ax[p.t] -= p.d.x;
-    ay[p.s] += p.d.y, ay[p.t] -= p.d.y;
-  }
   Eigen::SparseMatrix<double> a(groups, groups);
   a.setFromTriplets(trip.begin(), trip.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(a);
   if (solver.info() != Eigen::Success) throw isochart::Error("synth: exemplar-copy factorization failed");
-  Eigen::VectorXd cx = solver.solve(bx), cy = solver.solve(by);
+  // Solves with each pair's offset turned by the mean of its two samples' turns (unit complex
+  // numbers; none: the offsets as they are).
+  Eigen::VectorXd cx, cy;
+  auto solve = [&](const std::vector<Vec2d>* turn) {
+    Eigen::VectorXd rx = bx, ry = by;
+    for (const Pair& p : pairs) {
+      Vec2d d = p.d;
+      if (turn) {
+        const double c = 0.5 * ((*turn)[p.s].x + (*turn)[p.t].x), sn = 0.5 * ((*turn)[p.s].y + (*turn)[p.t].y);
+        d = {c * p.d.x - sn * p.d.y, sn * p.d.x + c * p.d.y};
+      }
+      rx[p.s] -= d.x, rx[p.t] += d.x;
+      ry[p.s] -= d.y, ry[p.t] += d.y;
+    }
+    cx = solver.solve(rx);
+    cy = solver.solve(ry);
+  };
+  solve(nullptr);
   // As rigid as possible (local/global, Sorkine & Alexa 2007): offsets that do not close (the
   // field turns on a curved surface) are shortened by the plain fit, which magnifies the
   // exemplar there; turning each sample's offsets by the rotation that best matches its
@@ -255,15 +265,7 @@ double relax_exemplar_coords(const mcgim::GeometryImage& g, const LevelGeometry&
       const double r = std::hypot(sum_dot[gi], sum_cross[gi]);
       if (r > 0) turn[gi] = {sum_dot[gi] / r, sum_cross[gi] / r};
     }
-    Eigen::VectorXd rx = ax, ry = ay;
-    for (const Pair& p : pairs) {
-      const double c = 0.5 * (turn[p.s].x + turn[p.t].x), sn = 0.5 * (turn[p.s].y + turn[p.t].y);
-      const Vec2d d{c * p.d.x - sn * p.d.y, sn * p.d.x + c * p.d.y};
-      rx[p.s] -= d.x, rx[p.t] += d.x;
-      ry[p.s] -= d.y, ry[p.t] += d.y;
-    }
-    cx = solver.solve(rx);
-    cy = solver.solve(ry);
+    solve(&turn);
   }
   for (int s = 0; s < g.width * g.height; ++s)
     if (g.defined(s) && reached[s]) coord[s] = {cx[g.group[s]], cy[g.group[s]]};
@@ -1181,7 +1183,6 @@ Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, 
   auto read = [&](double u, double v, double* rgb) {
     const double fu = u - 0.5, fv = v - 0.5;
     const double iu = std::floor(fu), iv = std::floor(fv);
-    if (!(std::fabs(iu) < 1e8 && std::fabs(iv) < 1e8)) return false;
     const double au = fu - iu, av = fv - iv;
     const int x0 = static_cast<int>(iu), y0 = static_cast<int>(iv);
     const int xs[2] = {mirror(x0, look.image.width), mirror(x0 + 1, look.image.width)};
@@ -1189,10 +1190,10 @@ Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, 
     for (int c = 0; c < 3; ++c)
       rgb[c] = (1 - av) * ((1 - au) * look.image.at(xs[0], ys[0], c) + au * look.image.at(xs[1], ys[0], c)) +
                av * ((1 - au) * look.image.at(xs[0], ys[1], c) + au * look.image.at(xs[1], ys[1], c));
-    return true;
   };
   // The exemplar position of sample s continued to image position (px, py), in finest-level
-  // exemplar pixels; false when the sample has none.
+  // exemplar pixels; false when the sample has none (or a degenerate frame sends it off to
+  // where the lookup's integer pixel indices would overflow).
   auto continued = [&](int s, double px, double py, double& ex, double& ey) {
     const int src = magnify ? synthesis->exemplar_pixels[g.group[s]] : -1;
     if (src < 0) return false;
@@ -1200,7 +1201,7 @@ Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, 
     const double dx = px - (s % g.width + 0.5), dy = py - (s / g.width + 0.5);
     ex = src % ex_w + 0.5 + j[0] * dx + j[1] * dy;
     ey = src / ex_w + 0.5 + j[2] * dx + j[3] * dy;
-    return std::isfinite(ex) && std::isfinite(ey);
+    return std::fabs(ex) < 1e8 && std::fabs(ey) < 1e8;
   };
   // Colour at image position (px, py) from up to four samples with weights: samples whose
   // continued positions agree (within a pixel) with the heaviest one's continue one patch and
@@ -1223,20 +1224,18 @@ Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, 
         total += wgt[k];
         continue;
       }
-      if (!(has[k] && read(qx[k] * level_to_look, qy[k] * level_to_look, rgb)))
+      if (has[k]) {
+        read(qx[k] * level_to_look, qy[k] * level_to_look, rgb);
+      } else {
         for (int c = 0; c < 3; ++c) rgb[c] = tex(smp[k], c);
+      }
       for (int c = 0; c < 3; ++c) v[c] += wgt[k] * rgb[c];
       total += wgt[k];
     }
     if (mw > 0) {
       double rgb[3];
-      if (read(mx / mw * level_to_look, my / mw * level_to_look, rgb)) {
-        for (int c = 0; c < 3; ++c) v[c] += mw * rgb[c];
-      } else {
-        for (int k = 0; k < n; ++k)
-          if (has[k] && std::fabs(qx[k] - qx[lead]) <= 1 && std::fabs(qy[k] - qy[lead]) <= 1)
-            for (int c = 0; c < 3; ++c) v[c] += wgt[k] * tex(smp[k], c);
-      }
+      read(mx / mw * level_to_look, my / mw * level_to_look, rgb);
+      for (int c = 0; c < 3; ++c) v[c] += mw * rgb[c];
     }
     return total;
   };
