@@ -7,6 +7,8 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>
+#include <CGAL/Polygon_2_algorithms.h>
+#include <tbb/parallel_for.h>
 
 #include "isochart/error.h"
 
@@ -283,7 +285,124 @@ bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec
   return uv_layout_is_embedding(tris, uv, Topology(tris, static_cast<int>(uv.size())));
 }
 
+namespace {
+
+// More charts than this and the pairwise nesting test below would cost more than it saves.
+constexpr int kMaxProvenCharts = 4096;
+
+// Proves that no two UV triangles of `mesh` overlap without testing triangle pairs: each
+// group of faces joined through shared texture coordinates must be proven one-to-one on its
+// own (uv_layout_is_embedding), and then the groups' regions, bounded by simple polygons,
+// overlap only if two boundaries meet or one region lies inside another. So no boundary
+// segment may meet one of another group (exact test), and no group may have a boundary vertex
+// inside another's polygon. False means "not proven": any doubt (a group that is no disk, a
+// touching pair, too many groups) leaves it to the all-pairs test.
+bool uv_groups_proven_disjoint(const Mesh& mesh) {
+  const int nf = mesh.num_faces();
+  const int nu = static_cast<int>(mesh.uvs.size());
+  if (nf == 0 || static_cast<int>(mesh.face_uvs.size()) != nf) return false;
+  std::vector<int> parent(nu);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const Face& t : mesh.face_uvs) {
+    for (int k = 0; k < 3; ++k)
+      if (t[k] < 0 || t[k] >= nu) return false;
+    for (int k = 1; k < 3; ++k) {
+      const int a = find(t[0]), b = find(t[k]);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  }
+  std::vector<int> group_of(nu, -1), local(nu, -1);
+  std::vector<std::vector<Face>> tris;
+  std::vector<std::vector<Vec2d>> uv;
+  for (const Face& t : mesh.face_uvs) {
+    const int r = find(t[0]);
+    if (group_of[r] < 0) {
+      if (static_cast<int>(tris.size()) == kMaxProvenCharts) return false;
+      group_of[r] = static_cast<int>(tris.size());
+      tris.emplace_back();
+      uv.emplace_back();
+    }
+    const int g = group_of[r];
+    Face lt;
+    for (int k = 0; k < 3; ++k) {
+      if (local[t[k]] < 0) {
+        local[t[k]] = static_cast<int>(uv[g].size());
+        uv[g].push_back(mesh.uvs[t[k]]);
+      }
+      lt[k] = local[t[k]];
+    }
+    tris[g].push_back(lt);
+  }
+  const int ng = static_cast<int>(tris.size());
+  std::vector<std::vector<int>> loop(ng);
+  std::vector<char> proven(ng, 0);
+  tbb::parallel_for(0, ng, [&](int g) {
+    const Topology topo(tris[g], static_cast<int>(uv[g].size()));
+    if (!uv_layout_is_embedding(tris[g], uv[g], topo)) return;
+    loop[g] = topo.boundary_loops()[0];
+    proven[g] = 1;
+  });
+  if (std::find(proven.begin(), proven.end(), 0) != proven.end()) return false;
+  if (ng == 1) return true;
+
+  using Box = CGAL::Box_intersection_d::Box_with_handle_d<double, 2, std::size_t,
+                                                          CGAL::Box_intersection_d::ID_EXPLICIT>;
+  std::vector<Box> boxes;
+  std::vector<std::pair<int, int>> segment;  // (group, index in its loop)
+  std::vector<CGAL::Bbox_2> extent(ng);
+  for (int g = 0; g < ng; ++g) {
+    const std::size_t n = loop[g].size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec2d& a = uv[g][loop[g][i]];
+      const Vec2d& b = uv[g][loop[g][(i + 1) % n]];
+      const CGAL::Bbox_2 box(std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.x, b.x), std::max(a.y, b.y));
+      extent[g] = i == 0 ? box : extent[g] + box;
+      boxes.emplace_back(box, segment.size());
+      segment.emplace_back(g, static_cast<int>(i));
+    }
+  }
+  auto point = [&](int g, int i) {
+    const Vec2d& p = uv[g][loop[g][i % loop[g].size()]];
+    return P2(p.x, p.y);
+  };
+  bool apart = true;
+  auto check = [&](const Box& x, const Box& y) {
+    if (!apart) return;
+    const auto [ga, ia] = segment[x.handle()];
+    const auto [gb, ib] = segment[y.handle()];
+    if (ga == gb) return;  // within a group: proven simple already
+    if (CGAL::do_intersect(K::Segment_2(point(ga, ia), point(ga, ia + 1)),
+                           K::Segment_2(point(gb, ib), point(gb, ib + 1))))
+      apart = false;
+  };
+  CGAL::box_self_intersection_d(boxes.begin(), boxes.end(), check, std::ptrdiff_t(10),
+                                CGAL::Box_intersection_d::CLOSED);
+  if (!apart) return false;
+  // Boundaries apart: each pair of regions is disjoint or nested, and a region can only lie
+  // inside another whose extent holds its own.
+  auto inside = [](const CGAL::Bbox_2& a, const CGAL::Bbox_2& b) {
+    return a.xmin() >= b.xmin() && a.xmax() <= b.xmax() && a.ymin() >= b.ymin() && a.ymax() <= b.ymax();
+  };
+  for (int a = 0; a < ng; ++a)
+    for (int b = 0; b < ng; ++b) {
+      if (a == b || !inside(extent[a], extent[b])) continue;
+      std::vector<P2> polygon;
+      polygon.reserve(loop[b].size());
+      for (std::size_t i = 0; i < loop[b].size(); ++i) polygon.push_back(point(b, static_cast<int>(i)));
+      if (CGAL::bounded_side_2(polygon.begin(), polygon.end(), point(a, 0), K()) != CGAL::ON_UNBOUNDED_SIDE)
+        return false;
+    }
+  return true;
+}
+
+}  // namespace
+
 std::vector<std::pair<int, int>> overlapping_uv_pairs(const Mesh& mesh, std::size_t max_pairs) {
+  if (uv_groups_proven_disjoint(mesh)) return {};
   std::vector<std::array<Vec2d, 3>> tris(mesh.faces.size());
   for (int f = 0; f < mesh.num_faces(); ++f)
     for (int k = 0; k < 3; ++k) tris[f][k] = mesh.uvs[mesh.face_uvs[f][k]];

@@ -174,3 +174,66 @@ TEST_CASE("a chart layout is proven one-to-one from its boundary, or not proven"
     CHECK(overlapping > 30);
   }
 }
+
+namespace {
+
+// Two charts, each a 4×4 grid of squares with its own texture coordinates: the first on
+// [0, 4]², the second scaled by `s` and moved by `offset`.
+Mesh two_charts(double s, Vec2d offset) {
+  Mesh m;
+  const std::vector<Face> grid = grid_faces(4, 4);
+  for (int c = 0; c < 2; ++c) {
+    const int base = static_cast<int>(m.positions.size());
+    for (int j = 0; j <= 4; ++j)
+      for (int i = 0; i <= 4; ++i) {
+        m.positions.push_back({static_cast<double>(i), static_cast<double>(j), static_cast<double>(c)});
+        m.uvs.push_back(c == 0 ? Vec2d{double(i), double(j)} : Vec2d{s * i, s * j} + offset);
+      }
+    for (const Face& f : grid) m.faces.push_back({base + f[0], base + f[1], base + f[2]});
+  }
+  m.face_uvs = m.faces;
+  return m;
+}
+
+std::vector<std::array<Vec2d, 3>> mesh_corner_uvs(const Mesh& m) {
+  std::vector<std::array<Vec2d, 3>> t(m.faces.size());
+  for (int f = 0; f < m.num_faces(); ++f)
+    for (int k = 0; k < 3; ++k) t[f][k] = m.uvs[m.face_uvs[f][k]];
+  return t;
+}
+
+}  // namespace
+
+TEST_CASE("the whole-atlas overlap count proves charts apart or counts pairs", "[stretch][overlap]") {
+  // The mesh overload first tries to prove the charts apart from their boundaries; whatever
+  // it concludes must match the all-pairs test of the same triangles.
+  struct Case {
+    const char* name;
+    double s;
+    Vec2d offset;
+    bool overlaps;
+  };
+  const Case cases[] = {
+      {"side by side", 1.0, {5, 0}, false},
+      {"touching along a side", 1.0, {4, 0}, false},
+      {"touching at a corner", 1.0, {4, 4}, false},
+      {"nested inside without crossing", 0.25, {1.3, 1.7}, true},
+      {"around the other without crossing", 3.0, {-4, -4}, true},
+      {"boundaries crossing", 1.0, {2.5, 1.5}, true},
+      {"in a concave notch of the other's box, apart", 1.0, {-5, 0}, false},
+  };
+  for (const Case& c : cases) {
+    INFO(c.name);
+    const Mesh m = two_charts(c.s, c.offset);
+    const auto all_pairs = overlapping_uv_pairs(mesh_corner_uvs(m));
+    CHECK(overlapping_uv_pairs(m) == all_pairs);
+    CHECK(all_pairs.empty() == !c.overlaps);
+  }
+  SECTION("a chart folded onto itself is counted, not proven") {
+    Mesh m = two_charts(1.0, {6, 0});
+    m.uvs[6] = {3.5, 3.5};  // an interior vertex of the first chart dragged across others
+    const auto all_pairs = overlapping_uv_pairs(mesh_corner_uvs(m));
+    CHECK_FALSE(all_pairs.empty());
+    CHECK(overlapping_uv_pairs(m) == all_pairs);
+  }
+}
