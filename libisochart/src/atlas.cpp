@@ -6,6 +6,7 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_for_each.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
@@ -71,6 +72,7 @@ struct Work {
   int depth = 0;
   std::vector<int> path;     // part indices from the root of the recursion
   bool force_split = false;  // --max-charts: split even if the chart meets the bounds
+  bool alone = false;        // the only chart of its recursion, nothing runs beside it
 };
 
 // What processing one chart produced: either an accepted parameterization or parts to recurse on.
@@ -237,6 +239,7 @@ class Builder {
     for (size_t i = 0; i < queue.size(); ++i) {
       queue[i].path = {static_cast<int>(i)};
       queue[i].force_split = force_first_split;
+      queue[i].alone = queue.size() == 1;
     }
     std::mutex mutex;
     std::vector<std::pair<std::vector<int>, DoneChart>> done;
@@ -303,8 +306,35 @@ class Builder {
     }
     Embedding emb = embed(g, out.times, landmarks_for(g, faces));
     const bool disk_like = topo.genus() == 0 && !topo.boundary_loops().empty();
-    if (disk_like && !force_split && try_accept(g, topo, detail::isomap_uv(emb), po, out)) return out;
-    // Split (§5).
+    if (disk_like && !force_split) {
+      if (!work.alone) {
+        if (try_accept(g, topo, detail::isomap_uv(emb), po, out)) return out;
+      } else {
+        // The only chart in progress (the whole mesh, mostly): nothing else keeps the other
+        // cores busy, so the split is computed while the acceptance is tried and dropped if
+        // the chart is accepted. Both depend only on the chart: the result is the same.
+        const std::vector<Vec2d> start = detail::isomap_uv(emb);
+        Outcome split_out;
+        bool accepted = false;
+        tbb::parallel_invoke([&] { accepted = try_accept(g, topo, start, po, out); },
+                             [&] { split(work, g, topo, po, emb, split_out); });
+        if (accepted) return out;
+        out.times.add(split_out.times);
+        out.parts = std::move(split_out.parts);
+        if (split_out.accepted) {
+          out.accepted = true;
+          out.chart = std::move(split_out.chart);
+        }
+        return out;
+      }
+    }
+    split(work, g, topo, po, emb, out);
+    return out;
+  }
+
+  // Splits a chart that was not accepted (§5) into `out.parts`; `emb` is its embedding.
+  void split(const Work& work, const detail::ChartGeometry& g, const Topology& topo, const detail::ParamOptions& po,
+             Embedding& emb, Outcome& out) const {
     auto t0 = Clock::now();
     if (!o_.vertex_signal.empty() && o_.signal_beta < 1)
       emb = detail::combined_embedding(g, emb, o_.vertex_signal, o_.signal_dimension, o_.signal_beta);
@@ -333,9 +363,8 @@ class Builder {
       out.parts.clear();
       out.accepted = true;
       out.chart.param = detail::parameterize(g, detail::isomap_uv(emb), po);
-      out.chart.geometry = std::move(g);
+      out.chart.geometry = g;
     }
-    return out;
   }
 
   // Landmarks for chart g (with parent faces `faces`): the full count for a whole component,
