@@ -435,6 +435,7 @@ class Builder {
     // Background attempts: queued (0), running (1), done (2) or abandoned before starting (3).
     struct Slot {
       std::atomic<int> state{0};
+      std::atomic<bool> cancel{false};  // abandoned while running: stop early
       std::shared_ptr<const DoneChart> a, b;
       Outcome out;
       std::exception_ptr error;
@@ -442,7 +443,7 @@ class Builder {
     // Whoever moves a slot from queued to running computes it.
     auto run_slot = [this](Slot& slot) {
       try {
-        slot.out = merge_charts(*slot.a, *slot.b);
+        slot.out = merge_charts(*slot.a, *slot.b, &slot.cancel);
       } catch (...) {
         slot.error = std::current_exception();
       }
@@ -521,7 +522,8 @@ class Builder {
           continue;
         }
         int queued = 0;
-        k->second->state.compare_exchange_strong(queued, 3);
+        // Already running: its outcome will never be asked for, so it may stop.
+        if (!k->second->state.compare_exchange_strong(queued, 3)) k->second->cancel.store(true);
         k = ahead.erase(k);
       }
     };
@@ -622,7 +624,7 @@ class Builder {
     // Attempts nobody will ask for: those not started are dropped, running ones finish.
     for (auto& [k, slot] : ahead) {
       int queued = 0;
-      slot->state.compare_exchange_strong(queued, 3);
+      if (!slot->state.compare_exchange_strong(queued, 3)) slot->cancel.store(true);
     }
     background.wait();
     done.clear();
@@ -632,7 +634,7 @@ class Builder {
   // Tries to merge chart `a` into chart `b`. The start is the union of both parameterizations,
   // `a` moved onto `b` by the similarity that best matches their shared boundary vertices, so
   // no new embedding is needed; it is then untangled and optimized like any other start.
-  Outcome merge_charts(const DoneChart& a, const DoneChart& b) const {
+  Outcome merge_charts(const DoneChart& a, const DoneChart& b, const std::atomic<bool>* cancel = nullptr) const {
     Outcome out;
     std::vector<int> faces = a.geometry.faces;
     faces.insert(faces.end(), b.geometry.faces.begin(), b.geometry.faces.end());
@@ -689,6 +691,7 @@ class Builder {
     // Over the 14 shared meshes no accepted union started above 0.07 % (of 204), and 150 of
     // 525 failed ones did, some of them spending a second in optimization.
     po.max_start_overlap = 0.002;
+    po.cancel = cancel;
     try_accept(g, topo, start_uncut, po, out);
     return out;
   }

@@ -471,6 +471,7 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
   // §6: only vertices whose 1-ring exceeds the user's limit are optimized.
   opt.vertex_l2_threshold = o.max_l2;
   opt.give_up_l2 = o.max_l2;
+  opt.cancel = o.cancel;
   if (o.face_metric) opt.face_metric = chart_metric(g, *o.face_metric);
   double seconds = 0;
   // Every start of this chart is untangled, optimized and (for LSCM) pinned on one topology.
@@ -512,6 +513,7 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
                                                       (best.flipped > 0 || best.overlaps || near_miss)));
   }
   std::vector<Vec2d> uv;
+  if (o.cancel && o.cancel->load(std::memory_order_relaxed)) try_lscm = false;
   if (try_lscm && lscm(g, uv, &topo)) {
     ChartParam p = attempt(std::move(uv), "lscm");
     if (p.accepted || violation(p, o) < violation(best, o)) best = std::move(p);

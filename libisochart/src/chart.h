@@ -2,6 +2,7 @@
 // Internal: one chart's geometry, parameterization and acceptance test (Iso-charts §3, §6).
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -78,6 +79,8 @@ struct ParamOptions {
   double max_geometric_l2 = 2.0;
   /// The chart's topology if the caller has it, or null (then it is built once per call).
   const Topology* topology = nullptr;
+  /// OptimizeOptions::cancel: set when the result is no longer wanted (it is then not accepted).
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 struct ChartParam {

@@ -117,6 +117,7 @@ class Optimizer {
   }
 
   bool valid() const { return valid_; }
+  bool cancelled() const { return o_.cancel && o_.cancel->load(std::memory_order_relaxed); }
 
   double current_l2() const { return marea_ > 0 ? std::sqrt(s1_ * s2_) / marea_ : 0.0; }
 
@@ -137,7 +138,10 @@ class Optimizer {
       if (order.empty()) break;
       std::sort(order.begin(), order.end());
       long long moved = 0;
-      for (const auto& [score, v] : order) moved += optimize_vertex(v) ? 1 : 0;
+      for (const auto& [score, v] : order) {
+        if (cancelled()) return r;
+        moved += optimize_vertex(v) ? 1 : 0;
+      }
       r.moves += moved;
       ++r.sweeps;
       recompute_sums();  // keep the running sums free of drift
@@ -628,7 +632,8 @@ OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::
     r.gave_up = run.gave_up;
   }
   r.after = measure_stretch(positions, faces, uv);
-  if (!r.gave_up && r.after.flipped == 0 && r.after.linf > options.max_linf && options.linf_repair_passes > 0) {
+  if (!r.gave_up && r.after.flipped == 0 && r.after.linf > options.max_linf && options.linf_repair_passes > 0 &&
+      !(options.cancel && options.cancel->load(std::memory_order_relaxed))) {
     OptimizeOptions repair = options;
     repair.passes = options.linf_repair_passes;
     repair.linf_weight = 10 * options.linf_weight;

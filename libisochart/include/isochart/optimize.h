@@ -2,6 +2,7 @@
 /// Stretch optimization of one chart's parameterization (Sander et al. 2001; Iso-charts §6).
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <vector>
 
@@ -42,6 +43,9 @@ struct OptimizeOptions {
   /// y towards corner 2). The L2 term becomes Σ A·tr(Jᵀ G J)/2 normalized by the metric area
   /// Σ A·sqrt(det G); the Linf term stays geometric so no triangle degenerates. Empty: G = I.
   std::vector<std::array<double, 3>> face_metric;
+  /// When set and it turns true, the optimization stops at the next vertex (the caller no
+  /// longer wants the result: a merge attempt computed ahead and then abandoned).
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 struct OptimizeResult {
