@@ -143,6 +143,24 @@ bool Canvas::collides(const ChartRaster& r, int x, int y) const {
   return false;
 }
 
+unsigned Canvas::right_steps(const std::vector<MaskWord>& right_edge, int x0, int y, int steps) const {
+  // Edge texel at raster column c lands on canvas column x + c at position x: for x0 + 1 ..
+  // x0 + steps that is the run of canvas bits starting at x0 + 1 + c.
+  const Word window = (Word{1} << steps) - 1;
+  unsigned hits = 0;
+  for (const MaskWord& m : right_edge) {
+    const Word* row = &bits_[static_cast<std::size_t>(y + m.row) * row_words_];
+    for (Word b = m.bits; b; b &= b - 1) {
+      const int a = x0 + 1 + m.word * kWordBits + __builtin_ctzll(b);
+      const int w = a / kWordBits, bit = a % kWordBits;
+      Word v = row[w] >> bit;
+      if (bit + steps > kWordBits) v |= row[w + 1] << (kWordBits - bit);
+      hits |= static_cast<unsigned>(v & window);
+    }
+  }
+  return hits;
+}
+
 bool Canvas::collides(const std::vector<MaskWord>& mask, int x, int y) const {
   const int wx = x / kWordBits, bit = x % kWordBits;
   for (const MaskWord& m : mask)
@@ -273,10 +291,22 @@ void Canvas::search_block(const ChartRaster& r, int rotation, int bx, int by, in
     }
     candidates[y - by + 1] = mask;
   }
+  // Moves to the right along a row of positions, tested for all the row's positions in one
+  // pass over the right-edge texels (most positions searched are free, so each edge test read
+  // the whole mask): bit s − 1 of `steps` says the edge collides at x0 + s, x0 = bx − 1.
+  unsigned steps = 0;
+  int steps_row = kNone;
+  auto right_step_collides = [&](int x, int y) {
+    if (steps_row != y) {
+      steps_row = y;
+      steps = right_steps(r.edge[static_cast<int>(Side::Right)], bx - 1, y, bxe + 1 - (bx - 1));
+    }
+    return (steps >> (x - bx)) & 1u;
+  };
   auto fits = [&](int x, int y, bool from_left, bool from_below) {
     if (!((candidates[y - by + 1] >> (x - bx + 1)) & 1u)) return false;
     if (surely_empty(x, y, x + r.w, y + r.h)) return true;
-    if (from_left) return !collides(r.edge[static_cast<int>(Side::Right)], x, y);
+    if (from_left) return !right_step_collides(x, y);
     if (from_below) return !collides(r.edge[static_cast<int>(Side::Top)], x, y);
     if (surely_crowded(x, y, x + r.w, y + r.h, r.texels)) return false;
     if (core.w > 0 && surely_occupied(x + core.x, y + core.y, x + core.x + core.w, y + core.y + core.h))

@@ -59,6 +59,8 @@ class Canvas {
   bool collides(const ChartRaster& r, int x, int y) const;
   /// Whether the sparse mask at (x, y) meets a canvas texel.
   bool collides(const std::vector<MaskWord>& mask, int x, int y) const;
+  /// collides(right_edge, x0 + s, y) for s = 1 .. `steps` (≤ 32) as bit s − 1, in one pass.
+  unsigned right_steps(const std::vector<MaskWord>& right_edge, int x0, int y, int steps) const;
   /// Touching ring texels of a raster at (x, y) (placed charts and bounding-box sides).
   int contact(const ChartRaster& r, int x, int y) const;
   /// Adds the raster, dilated by the gutter, at (x, y).
