@@ -621,7 +621,7 @@ class Builder {
         progress = std::find(tried.begin(), tried.end(), 0) != tried.end();
       }
     }
-    // Attempts nobody will ask for: those not started are dropped, running ones finish.
+    // Attempts nobody will ask for: those not started are dropped, running ones told to stop.
     for (auto& [k, slot] : ahead) {
       int queued = 0;
       if (!slot->state.compare_exchange_strong(queued, 3)) slot->cancel.store(true);

@@ -387,13 +387,13 @@ bool uv_groups_proven_disjoint(const Mesh& mesh) {
   auto inside = [](const CGAL::Bbox_2& a, const CGAL::Bbox_2& b) {
     return a.xmin() >= b.xmin() && a.xmax() <= b.xmax() && a.ymin() >= b.ymin() && a.ymax() <= b.ymax();
   };
+  std::vector<std::vector<P2>> polygon(ng);  // made when first needed
   for (int a = 0; a < ng; ++a)
     for (int b = 0; b < ng; ++b) {
       if (a == b || !inside(extent[a], extent[b])) continue;
-      std::vector<P2> polygon;
-      polygon.reserve(loop[b].size());
-      for (std::size_t i = 0; i < loop[b].size(); ++i) polygon.push_back(point(b, static_cast<int>(i)));
-      if (CGAL::bounded_side_2(polygon.begin(), polygon.end(), point(a, 0), K()) != CGAL::ON_UNBOUNDED_SIDE)
+      if (polygon[b].empty())
+        for (std::size_t i = 0; i < loop[b].size(); ++i) polygon[b].push_back(point(b, static_cast<int>(i)));
+      if (CGAL::bounded_side_2(polygon[b].begin(), polygon[b].end(), point(a, 0), K()) != CGAL::ON_UNBOUNDED_SIDE)
         return false;
     }
   return true;
