@@ -1,5 +1,6 @@
 #include "isochart/optimize.h"
 
+#include <atomic>
 #include <catch2/catch.hpp>
 #include <cmath>
 
@@ -50,6 +51,20 @@ TEST_CASE("stretch optimization reduces L2 and Linf without flips", "[optimize]"
           for (const auto& f : p.faces) t.push_back({p.uv[f[0]], p.uv[f[1]], p.uv[f[2]]});
           return t;
         }()).empty());
+}
+
+TEST_CASE("a cancelled optimization stops without moving anything", "[optimize]") {
+  Patch p = bump_patch(24, 1.5);
+  const std::vector<Vec2d> start = p.uv;
+  std::atomic<bool> cancel{true};
+  OptimizeOptions o;
+  o.cancel = &cancel;
+  const OptimizeResult r = optimize_stretch(p.positions, p.faces, p.uv, o);
+  CHECK(r.moves == 0);
+  CHECK(p.uv == start);
+  // The same options without the flag set optimize as usual.
+  cancel = false;
+  CHECK(optimize_stretch(p.positions, p.faces, p.uv, o).moves > 0);
 }
 
 TEST_CASE("stretch optimization is deterministic for a seed", "[optimize]") {
