@@ -15,6 +15,8 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+bool cancelled(const OptimizeOptions& o) { return o.cancel && o.cancel->load(std::memory_order_relaxed); }
+
 // The 3D triangle in its own orthonormal frame: q0 = (0,0), q1 = (x1,0), q2 = (x2,y2).
 struct FlatTriangle {
   double x1, x2, y2;
@@ -117,7 +119,6 @@ class Optimizer {
   }
 
   bool valid() const { return valid_; }
-  bool cancelled() const { return o_.cancel && o_.cancel->load(std::memory_order_relaxed); }
 
   double current_l2() const { return marea_ > 0 ? std::sqrt(s1_ * s2_) / marea_ : 0.0; }
 
@@ -139,7 +140,7 @@ class Optimizer {
       std::sort(order.begin(), order.end());
       long long moved = 0;
       for (const auto& [score, v] : order) {
-        if (cancelled()) return r;
+        if (cancelled(o_)) return r;
         moved += optimize_vertex(v) ? 1 : 0;
       }
       r.moves += moved;
@@ -633,7 +634,7 @@ OptimizeResult optimize_stretch(const std::vector<Vec3d>& positions, const std::
   }
   r.after = measure_stretch(positions, faces, uv);
   if (!r.gave_up && r.after.flipped == 0 && r.after.linf > options.max_linf && options.linf_repair_passes > 0 &&
-      !(options.cancel && options.cancel->load(std::memory_order_relaxed))) {
+      !cancelled(options)) {
     OptimizeOptions repair = options;
     repair.passes = options.linf_repair_passes;
     repair.linf_weight = 10 * options.linf_weight;

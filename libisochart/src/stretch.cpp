@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include "isochart/error.h"
+#include "isochart/union_find.h"
 
 namespace isochart {
 
@@ -301,25 +302,18 @@ bool uv_groups_proven_disjoint(const Mesh& mesh) {
   const int nf = mesh.num_faces();
   const int nu = static_cast<int>(mesh.uvs.size());
   if (nf == 0 || static_cast<int>(mesh.face_uvs.size()) != nf) return false;
-  std::vector<int> parent(nu);
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  UnionFind uv_sets(nu);
   for (const Face& t : mesh.face_uvs) {
     for (int k = 0; k < 3; ++k)
       if (t[k] < 0 || t[k] >= nu) return false;
-    for (int k = 1; k < 3; ++k) {
-      const int a = find(t[0]), b = find(t[k]);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
+    uv_sets.unite(t[0], t[1]);
+    uv_sets.unite(t[0], t[2]);
   }
   std::vector<int> group_of(nu, -1), local(nu, -1);
   std::vector<std::vector<Face>> tris;
   std::vector<std::vector<Vec2d>> uv;
   for (const Face& t : mesh.face_uvs) {
-    const int r = find(t[0]);
+    const int r = uv_sets.find(t[0]);
     if (group_of[r] < 0) {
       if (static_cast<int>(tris.size()) == kMaxProvenCharts) return false;
       group_of[r] = static_cast<int>(tris.size());
