@@ -31,6 +31,7 @@ void check_options(const LevelOptions& o) {
   if (o.optimize_iterations < 0) bad("optimize_iterations must be >= 0");
   if (o.geometric_iterations < 0) bad("geometric_iterations must be >= 0");
   if (!(o.optimize_regularization > 0)) bad("optimize_regularization must be > 0");
+  if (!(o.fit_regularization > 0)) bad("fit_regularization must be > 0");
 }
 
 Level build_once(const detail::AtlasCharts& a, const LevelOptions& o, const std::vector<double>& area_scale,
