@@ -97,16 +97,17 @@ Topology::Topology(const std::vector<Face>& faces, int num_vertices)
 
   // Non-manifold vertices: walk the faces around v through the edges incident to v; if the
   // walk from the first face does not reach them all, they form several fans.
-  std::vector<int> stack;
-  std::vector<char> seen;
+  std::vector<int> stack, walked;
+  std::vector<char> seen, edge_walked(edges_.size(), 0);
   for (int v = 0; v < num_vertices; ++v) {
     const IndexRange vfs = vertex_faces(v);
     if (vfs.size() < 2) continue;
     seen.assign(vfs.size(), 0);
+    // vfs is in face order: a binary search, since a degenerate fan (every face on one
+    // vertex, as UVs all at one point give) made a linear one cubic in the fan's size.
     auto local = [&](int f) {
-      for (int i = 0; i < vfs.size(); ++i)
-        if (vfs[i] == f) return i;
-      return -1;
+      const int* it = std::lower_bound(vfs.begin(), vfs.end(), f);
+      return it != vfs.end() && *it == f ? static_cast<int>(it - vfs.begin()) : -1;
     };
     stack.assign(1, 0);
     seen[0] = 1;
@@ -117,6 +118,10 @@ Topology::Topology(const std::vector<Face>& faces, int num_vertices)
       for (int k = 0; k < 3; ++k) {
         const int e = face_edges_[f][k];
         if (edges_[e].v0 != v && edges_[e].v1 != v) continue;
+        // Each edge's faces once per walk (an edge of many degenerate faces is met from each).
+        if (edge_walked[e]) continue;
+        edge_walked[e] = 1;
+        walked.push_back(e);
         for (int g : edge_faces(e)) {
           const int i = local(g);
           if (i >= 0 && !seen[i]) {
@@ -127,6 +132,8 @@ Topology::Topology(const std::vector<Face>& faces, int num_vertices)
         }
       }
     }
+    for (int e : walked) edge_walked[e] = 0;
+    walked.clear();
     if (reached < vfs.size()) nonmanifold_vertices_.push_back(v);
   }
 
