@@ -407,3 +407,22 @@ TEST_CASE("to_raw_mesh round-trips through validation", "[validate]") {
   CHECK(b.positions == a.positions);
   CHECK(b.faces == a.faces);
 }
+
+TEST_CASE("topology of large degenerate fans: one walk per edge", "[validate]") {
+  // 20,000 faces on one vertex (a UV layout whose corners all sit at one point, as faces
+  // without texture coordinates get): the fan walk used to re-read the shared edge's faces
+  // from every face and took minutes for a few thousand.
+  std::vector<Face> faces(20000, Face{0, 0, 0});
+  const Topology all(faces, 1);
+  CHECK(all.num_edges() == 1);
+  CHECK(all.edge_faces(0).size() == 60000);
+  CHECK(all.nonmanifold_vertices() == std::vector<int>{0});  // each face holds the vertex thrice
+  // A proper fan of the same size around one vertex is one fan: manifold there.
+  const int n = 20000;
+  std::vector<Face> fan;
+  for (int i = 0; i < n; ++i) fan.push_back({0, 1 + i, 1 + (i + 1) % n});
+  const Topology wheel(fan, n + 1);
+  CHECK(wheel.nonmanifold_vertices().empty());
+  CHECK(wheel.nonmanifold_edges().empty());
+  CHECK(wheel.boundary_loops().size() == 1);  // the rim
+}
