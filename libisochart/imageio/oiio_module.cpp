@@ -6,12 +6,14 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "../src/image_module.h"
 
@@ -40,9 +42,36 @@ int report(int status, const std::string& text, char* message, std::size_t size)
   return status;
 }
 
+// PNG files end with the IEND chunk, JPEG files with the EOI marker. A file cut short (a full
+// disk while writing, a partial download) lacks them; checking first keeps libpng from printing
+// its own complaint on stderr before ours. 1 complete, 0 cut short, -1 another format.
+int trailer_complete(const char* path) {
+  const char* dot = std::strrchr(path, '.');
+  if (!dot) return -1;
+  std::string ext(dot + 1);
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  static const unsigned char png_end[] = {0x49, 0x45, 0x4E, 0x44, 0xAE, 0x42, 0x60, 0x82};
+  static const unsigned char jpg_end[] = {0xFF, 0xD9};
+  const unsigned char* want = nullptr;
+  std::size_t n = 0;
+  if (ext == "png") want = png_end, n = sizeof png_end;
+  else if (ext == "jpg" || ext == "jpeg") want = jpg_end, n = sizeof jpg_end;
+  else return -1;
+  std::FILE* f = std::fopen(path, "rb");
+  if (!f) return 0;
+  unsigned char tail[8] = {0};
+  const bool ok = std::fseek(f, -static_cast<long>(n), SEEK_END) == 0 && std::fread(tail, 1, n, f) == n &&
+                  std::memcmp(tail, want, n) == 0;
+  std::fclose(f);
+  return ok ? 1 : 0;
+}
+
 int read_file(const char* path, long long max_values, int* width, int* height, int* channels, float** pixels,
               char* names, std::size_t names_size, char* message, std::size_t message_size) {
   *pixels = nullptr;
+  if (trailer_complete(path) == 0)
+    return report(kIsochartsImageInputError, "cannot read image: the file is cut short (no end marker)", message,
+                  message_size);
   // Keep alpha as stored (straight): OIIO would otherwise premultiply PNG colours by alpha.
   OIIO::ImageSpec config;
   config.attribute("oiio:UnassociatedAlpha", 1);
@@ -126,6 +155,19 @@ int write_file(const char* path, int width, int height, int channels, int stride
   const auto xstride = static_cast<OIIO::stride_t>(sizeof(float)) * stride;
   if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels, xstride)) return fail(out->geterror());
   if (!out->close()) return fail(out->geterror());
+  out.reset();
+  // Some writers (PNG among them) drop the errors of their last writes, e.g. on a full disk, and
+  // report success with the file cut short: check its end marker, or read other formats back.
+  const int complete = trailer_complete(path);
+  bool whole = complete == 1;
+  if (complete < 0) {
+    auto in = OIIO::ImageInput::open(path);
+    std::vector<float> back(static_cast<std::size_t>(width) * height * channels);
+    whole = in && in->spec().width == width && in->spec().height == height && in->spec().nchannels == channels &&
+            in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, back.data());
+    if (in) in->close();
+  }
+  if (!whole) return fail("the written file is cut short, disk full?");
   return kIsochartsImageOk;
 }
 
