@@ -8,6 +8,7 @@
 
 #include "cli.h"
 #include "isochart/error.h"
+#include "isochart/io.h"
 
 int main(int argc, char** argv) {
   cli::Context ctx;
@@ -55,7 +56,10 @@ int main(int argc, char** argv) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
 
   try {
+    // Outputs land together at the end, or not at all when a step fails.
+    isochart::OutputBatch outputs;
     action();
+    outputs.commit();
   } catch (const isochart::InputError& e) {
     ctx.end_progress();
     std::cerr << "isocharts: error: " << (e.file().empty() ? "" : e.file() + ": ") << e.what() << "\n";

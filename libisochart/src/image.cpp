@@ -16,6 +16,7 @@
 
 #include "image_module.h"
 #include "isochart/error.h"
+#include "isochart/io.h"
 
 namespace isochart {
 
@@ -206,6 +207,7 @@ void write_image(const std::string& path, const Image& image) {
     throw Error(message[0] ? "cannot write image " + path + " (" + message + ")"
                            : "cannot write image " + path);
   }
+  if (OutputBatch::stage(tmp.string(), target.string())) return;
   fs::rename(tmp, target, ec);
   if (ec) {
     const std::string reason = ec.message();

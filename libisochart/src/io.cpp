@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
 
 #include "io_internal.h"
 #include "isochart/builtin.h"
@@ -212,7 +213,7 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
       try {
         write_file_atomic(path, obj_text(mesh, stem + ".mtl", options.write_groups));
       } catch (...) {
-        std::remove(mtl_path.c_str());
+        if (!OutputBatch::open()) std::remove(mtl_path.c_str());  // else the batch removes it
         throw;
       }
       return;
@@ -244,6 +245,7 @@ void write_file_atomic(const std::string& path, const std::string& data) {
     ok = false;
     err = errno;
   }
+  if (ok && OutputBatch::stage(tmp, path)) return;
   if (ok && std::rename(tmp.c_str(), path.c_str()) != 0) {
     ok = false;
     err = errno;
@@ -252,6 +254,71 @@ void write_file_atomic(const std::string& path, const std::string& data) {
     std::remove(tmp.c_str());
     throw InputError(path, std::string("cannot write: ") + std::strerror(err));
   }
+}
+
+namespace {
+std::mutex batch_mutex;
+OutputBatch* batch = nullptr;
+}  // namespace
+
+OutputBatch::OutputBatch() {
+  std::lock_guard<std::mutex> lock(batch_mutex);
+  if (batch) throw Error("OutputBatch: a batch is already open");
+  batch = this;
+}
+
+OutputBatch::~OutputBatch() {
+  std::lock_guard<std::mutex> lock(batch_mutex);
+  for (const auto& [tmp, target] : staged_) std::remove(tmp.c_str());
+  batch = nullptr;
+}
+
+bool OutputBatch::stage(const std::string& tmp, const std::string& target) {
+  std::lock_guard<std::mutex> lock(batch_mutex);
+  if (!batch) return false;
+  // Written twice in one run: the later file wins.
+  for (auto& [t, g] : batch->staged_)
+    if (g == target) {
+      std::remove(t.c_str());
+      t = tmp;
+      return true;
+    }
+  batch->staged_.emplace_back(tmp, target);
+  return true;
+}
+
+bool OutputBatch::open() {
+  std::lock_guard<std::mutex> lock(batch_mutex);
+  return batch != nullptr;
+}
+
+std::string OutputBatch::current_path(const std::string& target) {
+  std::lock_guard<std::mutex> lock(batch_mutex);
+  if (batch)
+    for (const auto& [tmp, t] : batch->staged_)
+      if (t == target) return tmp;
+  return target;
+}
+
+void OutputBatch::commit() {
+  std::lock_guard<std::mutex> lock(batch_mutex);
+  // What makes a rename fail within one directory (a directory in the way) is checked for all
+  // first, so that a failure leaves none of the outputs.
+  for (const auto& [tmp, target] : staged_) {
+    struct stat st;
+    if (::stat(target.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+      throw InputError(target, "cannot write: Is a directory");
+  }
+  for (std::size_t i = 0; i < staged_.size(); ++i) {
+    const auto& [tmp, target] = staged_[i];
+    if (std::rename(tmp.c_str(), target.c_str()) != 0) {
+      const int err = errno;
+      const std::string failed = target;
+      staged_.erase(staged_.begin(), staged_.begin() + static_cast<std::ptrdiff_t>(i));  // the rest: removed
+      throw InputError(failed, std::string("cannot write: ") + std::strerror(err));
+    }
+  }
+  staged_.clear();
 }
 
 }  // namespace isochart

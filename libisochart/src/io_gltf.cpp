@@ -506,7 +506,7 @@ std::string glb_bytes(const Mesh& m, const std::string& texture) {
   if (!texture.empty()) {
     std::string bytes;
     try {
-      bytes = read_file(texture);
+      bytes = read_file(OutputBatch::current_path(texture));  // written earlier in this run?
     } catch (const InputError& e) {
       throw InputError(texture, std::string("texture ") + e.what());
     }

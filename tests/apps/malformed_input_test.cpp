@@ -268,3 +268,38 @@ TEST_CASE("a missing or broken image module is a clear error, and nothing is wri
   // Mesh work needs no image module at all.
   CHECK(run_cli("info builtin:sphere", err, "ISOCHARTS_IMAGE_MODULE='" + bogus.string() + "'") == 0);
 }
+
+TEST_CASE("a run that fails at its last output leaves none of its outputs", "[cli]") {
+  TempDir tmp("partial");
+  const fs::path err = tmp.path / "err.txt";
+  // The atlas OBJ is fine, its layout PNG cannot be written (no such directory): no OBJ either.
+  CHECK(run_cli("-q atlas builtin:sphere -o '" + (tmp.path / "a.obj").string() + "' --png '" +
+                    (tmp.path / "no/dir/a.png").string() + "'",
+                err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::StartsWith("isocharts: error: ") && Catch::Contains("a.png"));
+  // The report's place is taken by a directory: the OBJ written before it is not left either.
+  fs::create_directory(tmp.path / "r.json");
+  CHECK(run_cli("-q atlas builtin:sphere -o '" + (tmp.path / "b.obj").string() + "' --report '" +
+                    (tmp.path / "r.json").string() + "'",
+                err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("r.json"));
+  CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt", "r.json"});
+  CHECK(fs::is_empty(tmp.path / "r.json"));
+}
+
+TEST_CASE("a PNG cut short gets our one-line error instead of libpng's", "[cli]") {
+  TempDir tmp("cut_png");
+  const fs::path err = tmp.path / "err.txt", png = tmp.path / "v.png", cut = tmp.path / "cut.png";
+  REQUIRE(run_cli("render builtin:sphere -o '" + png.string() + "' --views 1", err) == 0);
+  const std::string whole = read_bytes(png);
+  REQUIRE(whole.size() > 200);
+  write_bytes(cut, whole.substr(0, whole.size() / 2));
+  const fs::path tri = tmp.path / "tri.obj";
+  write_bytes(tri, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
+  CHECK(run_cli("render '" + tri.string() + "' --texture '" + cut.string() + "' -o '" + (tmp.path / "w.png").string() + "'",
+                err) == 2);
+  const std::string text = read_bytes(err);
+  CHECK_THAT(text, Catch::StartsWith("isocharts: error: " + cut.string()) && Catch::Contains("cut short"));
+  CHECK(std::count(text.begin(), text.end(), '\n') == 1);
+  CHECK_FALSE(fs::exists(tmp.path / "w.png"));
+}

@@ -635,3 +635,39 @@ TEST_CASE("writes are atomic and leave nothing behind on failure", "[io]") {
   CHECK(read_bytes(d.file("x.txt")) == "new");
   CHECK(d.entries() == std::vector<std::string>{"taken.ply", "x.txt"});
 }
+
+TEST_CASE("an output batch lands all its files together or none", "[io]") {
+  TempDir d;
+  const Mesh m = attributed_cube();
+  {
+    OutputBatch batch;
+    save_mesh(m, d.file("a.ply"));
+    write_file_atomic(d.file("b.txt"), "first");
+    write_file_atomic(d.file("b.txt"), "second");  // the later write wins
+    // Nothing is in place before the commit; a reader in the same run finds the staged file.
+    CHECK_FALSE(fs::exists(d.file("a.ply")));
+    CHECK(OutputBatch::open());
+    CHECK(read_bytes(OutputBatch::current_path(d.file("b.txt"))) == "second");
+    batch.commit();
+  }
+  CHECK_FALSE(OutputBatch::open());
+  CHECK(read_bytes(d.file("b.txt")) == "second");
+  CHECK(d.entries() == std::vector<std::string>{"a.ply", "b.txt"});
+  {
+    // A failed run (no commit): its new outputs vanish, the old ones stay as they were.
+    OutputBatch batch;
+    write_file_atomic(d.file("b.txt"), "third");
+    save_mesh(m, d.file("c.obj"));
+  }
+  CHECK(read_bytes(d.file("b.txt")) == "second");
+  CHECK(d.entries() == std::vector<std::string>{"a.ply", "b.txt"});
+  {
+    // A directory in the way of one output: the commit fails before renaming any.
+    fs::create_directory(d.file("taken.txt"));
+    OutputBatch batch;
+    write_file_atomic(d.file("new.txt"), "x");
+    write_file_atomic(d.file("taken.txt"), "y");
+    CHECK_THROWS_WITH(batch.commit(), Catch::Contains("cannot write"));
+  }
+  CHECK(d.entries() == std::vector<std::string>{"a.ply", "b.txt", "taken.txt"});
+}

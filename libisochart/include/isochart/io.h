@@ -14,6 +14,8 @@
 ///   with (0, 0) (texture coordinates), with a warning in the validation report.
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "isochart/mesh.h"
 #include "isochart/validate.h"
@@ -79,5 +81,30 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
 /// counter) renamed over `path`, or removed on failure. Used for every output.
 /// \throw InputError(path, "cannot write: REASON").
 void write_file_atomic(const std::string& path, const std::string& data);
+
+/// All of a run's outputs, or none. While a batch is open, write_file_atomic, save_mesh and
+/// write_image leave each output in its temporary file; commit() renames them all into place,
+/// and a batch closed without commit() (a later step failed) removes them, so a failed run
+/// never leaves a partial set of outputs (an OBJ without its PNG, one level of four, ...).
+/// One batch at a time per process; writes from any thread join it.
+class OutputBatch {
+ public:
+  OutputBatch();
+  ~OutputBatch();
+  OutputBatch(const OutputBatch&) = delete;
+  OutputBatch& operator=(const OutputBatch&) = delete;
+  /// Renames every staged file over its target, in the order written.
+  /// 	hrow InputError(target, "cannot write: REASON") if a rename fails (the rest are removed).
+  void commit();
+  /// Called by the writers: keeps `tmp` for `target` when a batch is open (true), else false.
+  static bool stage(const std::string& tmp, const std::string& target);
+  static bool open();
+  /// Where `target`'s content is now: its staged temporary file if this batch wrote it, else
+  /// `target` (for a later step that reads an output back, e.g. a glb embedding its PNG).
+  static std::string current_path(const std::string& target);
+
+ private:
+  std::vector<std::pair<std::string, std::string>> staged_;
+};
 
 }  // namespace isochart
