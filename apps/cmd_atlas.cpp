@@ -151,7 +151,9 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("input", args->input, "Mesh file (OBJ/OFF/PLY/glTF) or builtin:NAME")->required();
   sub->add_option("-o,--output", args->outputs, "Output mesh with UVs (.obj, .glb, .ply); repeat for several");
   sub->add_option("--png", args->png, "Also draw the chart layout into this PNG");
-  sub->add_option("--png-size", args->png_size, "Size of the layout PNG in pixels")->check(CLI::Range(16, 16384));
+  // The layout is drawn at 2×2 samples per pixel, at most 2^25 samples in all.
+  sub->add_option("--png-size", args->png_size, "Size of the layout PNG in pixels (at most 2896)")
+      ->check(CLI::Range(16, 2896));
   sub->add_option("--max-l2", o.max_l2, "Bound on every chart's L2 stretch (1 = isometric)")->capture_default_str();
   sub->add_option("--max-linf", o.max_linf, "Bound on every chart's Linf stretch, shrink included")->capture_default_str();
   sub->add_option("--max-charts", o.max_charts, "0: as few charts as the bounds allow; N: split until N charts")

@@ -44,7 +44,9 @@ void check_size(int width, int height, int supersample) {
                              " is out of range (1 to " + std::to_string(kMaxSide) + " pixels per side)");
   if (static_cast<long long>(width) * height * supersample * supersample > kMaxSamples)
     throw InputError(
-        "", "image size " + std::to_string(width) + "x" + std::to_string(height) + " is too large to render");
+        "", "image size " + std::to_string(width) + "x" + std::to_string(height) + " at " + std::to_string(supersample) +
+                "x" + std::to_string(supersample) + " samples per pixel is too large to render (at most " +
+                std::to_string(kMaxSamples) + " samples in all)");
 }
 
 void check_mesh(const Mesh& mesh) {
