@@ -60,6 +60,12 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   if (fmt != isochart::MeshFormat::Glb && fmt != isochart::MeshFormat::Obj)
     throw isochart::InputError(a.output, "synth writes .glb or .obj (both are written, with PNG textures)");
   if (!a.direction.empty() && a.direction.size() != 3) bad_option("--direction takes three numbers x,y,z");
+  if (!a.direction.empty()) {
+    const double n2 = a.direction[0] * a.direction[0] + a.direction[1] * a.direction[1] + a.direction[2] * a.direction[2];
+    // (0,0,0) would silently mean "computed field", NaN nothing at all.
+    if (!std::isfinite(n2) || !(n2 > 0)) bad_option("--direction must be a finite, non-zero vector x,y,z");
+  }
+  if (std::isnan(a.coherence)) bad_option("--coherence must be a number");
   const isochart::Image exemplar = synth::exemplar_from(a.exemplar);
 
   const std::string prefix = "builtin:";

@@ -76,6 +76,13 @@ TEST_CASE("isocharts remesh writes watertight levels and reports them", "[mcgim]
   CHECK(run("remesh builtin:sphere -o " + out + " --signal normals --atlas " + out) == 2);
   CHECK(run("remesh builtin:sphere -o " + out + " --signal normals --signal-use all") == 2);
   CHECK(run("remesh builtin:sphere -o " + out + " --signal colors") == 2);  // no colours
+  // An external atlas must be of the input's surface: the sphere's own atlas is, the torus's not.
+  const std::string sphere_atlas = (run.dir / "sphere_atlas.obj").string(),
+                    torus_atlas = (run.dir / "torus_atlas.obj").string();
+  REQUIRE(run("atlas builtin:sphere -o " + sphere_atlas) == 0);
+  REQUIRE(run("atlas builtin:torus -o " + torus_atlas) == 0);
+  CHECK(run("remesh builtin:sphere -o " + out + " --res 32 --no-psnr --atlas " + sphere_atlas) == 0);
+  CHECK(run("remesh builtin:sphere -o " + out + " --res 32 --no-psnr --atlas " + torus_atlas) == 2);
 }
 
 TEST_CASE("isocharts remesh --signal builds a signal-specialized atlas", "[mcgim][cli]") {

@@ -116,6 +116,10 @@ TEST_CASE("bad exemplars are InputErrors", "[synth]") {
   CHECK(tmp.stderr_text().find("transparent.png") != std::string::npos);
   CHECK(tmp.run("synth builtin:sphere --exemplar " + tmp / "missing.png" + " -o " + tmp / "out.glb") == 2);
   CHECK(tmp.run("synth builtin:sphere --exemplar builtin:plaid -o " + tmp / "out.glb") == 2);
+  // A direction that names none would quietly mean the computed field (or nothing, for NaN).
+  CHECK(tmp.run("synth builtin:sphere --direction 0,0,0 -o " + tmp / "out.glb") == 2);
+  CHECK(tmp.stderr_text().find("--direction") != std::string::npos);
+  CHECK(tmp.run("synth builtin:sphere --direction nan,0,1 -o " + tmp / "out.glb") == 2);
   CHECK(!fs::exists(tmp / "out.glb"));
 }
 
