@@ -60,10 +60,17 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   } else if (!a.imt_out.empty() || !a.signal_texture_out.empty()) {
     bad_option("--imt-out and --signal-texture-out need --signal");
   }
-  isochart::Atlas atlas =
-      a.signal.empty() ? isochart::build_atlas(in.mesh, a.options, ctx.progress())
-                       : isochart::build_signal_atlas(in.mesh, signal, a.options, a.signal_options, &sig_stats,
-                                                      ctx.progress());
+  // The library's input errors name no file: here they are about the input mesh.
+  isochart::Atlas atlas = [&] {
+    try {
+      return a.signal.empty() ? isochart::build_atlas(in.mesh, a.options, ctx.progress())
+                              : isochart::build_signal_atlas(in.mesh, signal, a.options, a.signal_options,
+                                                             &sig_stats, ctx.progress());
+    } catch (const isochart::InputError& e) {
+      if (!e.file().empty()) throw;
+      throw isochart::InputError(a.input, e.what());
+    }
+  }();
   const isochart::Mesh out_mesh = atlas.apply_to(in.mesh);
   if (!a.signal.empty()) {
     isochart::Image baked;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <stdexcept>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -73,14 +74,21 @@ void top_eigenpairs(const Eigen::MatrixXd& b, int nev, Eigen::VectorXd& values, 
     Spectra::DenseSymMatProd<double> op(b);
     const int ncv = std::min(q, std::max(2 * nev + 1, 20));
     Spectra::SymEigsSolver<Spectra::DenseSymMatProd<double>> eigs(op, nev, ncv);
-    eigs.init();
-    eigs.compute(Spectra::SortRule::LargestAlge, 1000, 1e-12);
-    if (eigs.info() == Spectra::CompInfo::Successful) {
-      values = eigs.eigenvalues();
-      vectors = eigs.eigenvectors();
-      return;
+    // Spectra throws when its tridiagonal step fails (distances spanning many orders of
+    // magnitude, e.g. a vertex far out at 1e10): the dense solver below gets a go instead.
+    try {
+      eigs.init();
+      eigs.compute(Spectra::SortRule::LargestAlge, 1000, 1e-12);
+      if (eigs.info() == Spectra::CompInfo::Successful) {
+        values = eigs.eigenvalues();
+        vectors = eigs.eigenvectors();
+        return;
+      }
+    } catch (const std::runtime_error&) {
     }
   }
+  if (!b.allFinite())
+    throw InputError("", "embedding: squared geodesic distances overflow (coordinates too large)");
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(b);
   if (es.info() != Eigen::Success) throw Error("embedding: the eigen solver failed");
   // Eigen sorts ascending.

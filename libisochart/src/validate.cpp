@@ -279,6 +279,26 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
     if (has_colors && !is_finite(raw.colors[v]))
       fail("vertex " + std::to_string(v) + " has a non-finite colour " + text(raw.colors[v]));
   }
+  // Beyond these, products of coordinates (areas, squared distances) overflow or underflow
+  // double precision somewhere in the pipeline; say so here rather than fail deep inside.
+  constexpr double kMaxCoordinate = 1e30, kMinExtent = 1e-30;
+  {
+    Vec3d lo{0, 0, 0}, hi{0, 0, 0};
+    for (int v = 0; v < nv; ++v) {
+      const Vec3d& p = raw.positions[v];
+      if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxCoordinate)
+        fail("vertex " + std::to_string(v) + " has a coordinate beyond ±1e30 " + text(p));
+      lo = v == 0 ? p : Vec3d{std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+      hi = v == 0 ? p : Vec3d{std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    if (nv > 0 && extent > 0 && extent < kMinExtent)
+    {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.3g", extent);
+      fail(std::string("the mesh is too small to process (largest extent ") + buf + "); scale it up");
+    }
+  }
   for (std::size_t t = 0; t < raw.uvs.size(); ++t)
     if (!is_finite(raw.uvs[t]))
       fail("texture coordinate " + std::to_string(t) + " is not finite " + text(raw.uvs[t]));

@@ -108,6 +108,17 @@ TEST_CASE("unrecoverable input is an InputError naming the element", "[validate]
   inf.normals.assign(4, {0, 0, 1});
   inf.normals[3].z = INFINITY;
   CHECK_THAT(error_of(inf, true), Catch::Contains("vertex 3") && Catch::Contains("normal"));
+  // Finite but beyond what areas and squared distances can hold, or too small to have any.
+  RawMesh huge = tetrahedron();
+  huge.positions[1].x = 1e200;
+  CHECK_THAT(error_of(huge, true), Catch::Contains("vertex 1") && Catch::Contains("beyond"));
+  RawMesh tiny = tetrahedron();
+  for (auto& p : tiny.positions) p = p * 1e-300;
+  CHECK_THAT(error_of(tiny, true), Catch::Contains("too small"));
+  RawMesh small = tetrahedron();  // a micrometre-sized part in metres is fine
+  for (auto& p : small.positions) p = p * 1e-6;
+  ValidationReport rep;
+  CHECK(validate(small, rep).num_faces() == 4);
   RawMesh range = tetrahedron();
   range.polygons[1][2] = 4;
   CHECK_THAT(error_of(range, true), Catch::Contains("face 1 refers to vertex 4"));
