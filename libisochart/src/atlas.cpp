@@ -856,6 +856,11 @@ PackResult pack_atlas(const Mesh& mesh, Atlas& atlas, const PackOptions& options
 Atlas build_atlas(const Mesh& mesh, const AtlasOptions& options, const Progress& progress) {
   validate_options(options);
   if (mesh.faces.empty()) throw InputError("", "mesh has no faces");
+  // A chart holds at least one face; asking for more charts than faces would split every
+  // face off and then pack tens of thousands of single-triangle charts.
+  if (options.max_charts > mesh.num_faces())
+    throw InputError("", "--max-charts " + std::to_string(options.max_charts) + " exceeds the mesh's " +
+                             std::to_string(mesh.num_faces()) + " faces");
   if (!options.vertex_signal.empty() &&
       (options.signal_dimension < 1 ||
        options.vertex_signal.size() != static_cast<size_t>(mesh.num_vertices()) * options.signal_dimension))

@@ -172,6 +172,8 @@ TEST_CASE("bad atlas options are refused with a message naming the option", "[at
   o = {};
   o.max_charts = -1;
   fails_with(o, "--max-charts");
+  o.max_charts = sphere.num_faces() + 1;  // more charts than faces
+  fails_with(o, "--max-charts");
   o = {};
   o.alpha = 2;
   fails_with(o, "--alpha");
