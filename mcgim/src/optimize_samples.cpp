@@ -229,11 +229,12 @@ void solve(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& group_anc
 // + λ Σ |x_v − anchor_v|², n the original surface's unit normal at the target. The distance the
 // PSNR measures lies along n; solve()'s point-to-point fit also holds each matched point to its
 // target along the surface, which the fit pays for in normal accuracy (horse's signal atlas at
-// 47k samples: 87.48 dB point-to-point with a pull of 0.05; point-to-plane with a pull of 0.05
-// / 0.01 / 0.005 / 0.002: 88.06 / 89.09 / 89.65 / 90.41 dB, a point-to-point share of 0.02
-// lowering each). Matrix-free conjugate gradients on the 3V unknowns with 3×3 block-Jacobi
-// preconditioning (about a dozen iterations); products are gathered per vertex in a fixed
-// order, so the result does not depend on the thread count.
+// 47k samples: 87.48 dB point-to-point with a pull of 0.05; point-to-plane with a pull of 0.01
+// / 0.005 / 0.002: 89.09 / 89.65 / 90.41 dB before the turn-over guard below, a point-to-point
+// share of 0.02 lowering each: 88.70 at 0.01, 88.95 at 0.005). Matrix-free conjugate
+// gradients on the 3V unknowns with 3×3 block-Jacobi preconditioning (about a dozen
+// iterations); products are gathered per vertex in a fixed order, so the result does not depend
+// on the thread count.
 void solve_plane(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& group_anchor, double lambda,
                  double max_move, GeometryImage& im, Remesh& r) {
   const int nv = r.mesh.num_vertices();
@@ -241,7 +242,7 @@ void solve_plane(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& gro
   for (std::size_t i = 0; i < im.group.size(); ++i)
     if (r.sample_vertex[i] >= 0) anchor[r.sample_vertex[i]] = group_anchor[im.group[i]];
   const std::size_t np = pts.size();
-  // Compact copies of what the products read: the points' corners, weights and scaled normals,
+  // Compact copies of what the products read: the points' corners, weights, normals and areas,
   // and per vertex its (point, weight) incidences in point order.
   struct Row {
     int v[3];
