@@ -6,6 +6,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -44,26 +45,31 @@ int report(int status, const std::string& text, char* message, std::size_t size)
 
 // PNG files end with the IEND chunk, JPEG files with the EOI marker. A file cut short (a full
 // disk while writing, a partial download) lacks them; checking first keeps libpng from printing
-// its own complaint on stderr before ours. 1 complete, 0 cut short, -1 another format.
+// its own complaint on stderr before ours. Some writers append bytes after the marker (JPEG
+// padding, PNG trailers), so it is looked for in the last 64 KiB rather than at the very end.
+// 1 complete, 0 cut short, -1 another format.
 int trailer_complete(const char* path) {
   const char* dot = std::strrchr(path, '.');
   if (!dot) return -1;
   std::string ext(dot + 1);
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  static const unsigned char png_end[] = {0x49, 0x45, 0x4E, 0x44, 0xAE, 0x42, 0x60, 0x82};
-  static const unsigned char jpg_end[] = {0xFF, 0xD9};
-  const unsigned char* want = nullptr;
-  std::size_t n = 0;
-  if (ext == "png") want = png_end, n = sizeof png_end;
-  else if (ext == "jpg" || ext == "jpeg") want = jpg_end, n = sizeof jpg_end;
+  std::string marker;
+  if (ext == "png") marker = std::string("IEND\xAE\x42\x60\x82", 8);
+  else if (ext == "jpg" || ext == "jpeg") marker = std::string("\xFF\xD9", 2);
   else return -1;
   std::FILE* f = std::fopen(path, "rb");
   if (!f) return 0;
-  unsigned char tail[8] = {0};
-  const bool ok = std::fseek(f, -static_cast<long>(n), SEEK_END) == 0 && std::fread(tail, 1, n, f) == n &&
-                  std::memcmp(tail, want, n) == 0;
+  std::string tail;
+  if (std::fseek(f, 0, SEEK_END) == 0) {
+    const long size = std::ftell(f);
+    const long window = std::min<long>(size, 65536);
+    if (size >= 0 && std::fseek(f, size - window, SEEK_SET) == 0) {
+      tail.resize(static_cast<std::size_t>(window));
+      tail.resize(std::fread(&tail[0], 1, tail.size(), f));
+    }
+  }
   std::fclose(f);
-  return ok ? 1 : 0;
+  return tail.find(marker) != std::string::npos ? 1 : 0;
 }
 
 int read_file(const char* path, long long max_values, int* width, int* height, int* channels, float** pixels,

@@ -8,11 +8,11 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <stdexcept>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <stdexcept>
 #include <string>
 
 #include "isochart/error.h"

@@ -302,4 +302,9 @@ TEST_CASE("a PNG cut short gets our one-line error instead of libpng's", "[cli]"
   CHECK_THAT(text, Catch::StartsWith("isocharts: error: " + cut.string()) && Catch::Contains("cut short"));
   CHECK(std::count(text.begin(), text.end(), '\n') == 1);
   CHECK_FALSE(fs::exists(tmp.path / "w.png"));
+  // Bytes after the end marker (some writers pad or append) are no reason to refuse it.
+  const fs::path padded = tmp.path / "padded.png";
+  write_bytes(padded, whole + std::string(100, '\0'));
+  CHECK(run_cli("render '" + tri.string() + "' --texture '" + padded.string() + "' -o '" + (tmp.path / "w.png").string() + "'",
+                err) == 0);
 }
