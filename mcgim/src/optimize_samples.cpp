@@ -175,15 +175,37 @@ std::vector<FitPoint> closest_points(const ClosestPoints& original, const std::v
   return out;
 }
 
+// Per remesh vertex, the zippered position of its group: what the fit pulls towards.
+std::vector<Vec3d> vertex_anchors(const std::vector<Vec3d>& group_anchor, const GeometryImage& im, const Remesh& r) {
+  std::vector<Vec3d> anchor(r.mesh.num_vertices());
+  for (std::size_t i = 0; i < im.group.size(); ++i)
+    if (r.sample_vertex[i] >= 0) anchor[r.sample_vertex[i]] = group_anchor[im.group[i]];
+  return anchor;
+}
+
+// No vertex ends further than `max_move` from its anchor.
+void clamp_moves(const std::vector<Vec3d>& anchor, double max_move, std::vector<Vec3d>& pos) {
+  for (std::size_t v = 0; v < pos.size(); ++v) {
+    const Vec3d d = pos[v] - anchor[v];
+    const double len = norm(d);
+    pos[v] = anchor[v] + (len > max_move ? d * (max_move / len) : d);
+  }
+}
+
+// The fitted vertex positions back into the image's samples, and the remesh rebuilt from it.
+void write_back(const std::vector<Vec3d>& pos, GeometryImage& im, Remesh& r) {
+  for (std::size_t i = 0; i < im.group.size(); ++i)
+    if (r.sample_vertex[i] >= 0) im.positions[i] = pos[r.sample_vertex[i]];
+  r = reconstruct(im);
+}
+
 // Least squares: Σ area·|Σ w_i x_i − target|² + λ Σ |x_v − anchor_v|², then each vertex kept
 // within `max_move` of its anchor; writes the positions back to the image and rebuilds the
 // remesh (the shorter diagonals may change, where the image has not fixed them).
 void solve(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& group_anchor, double lambda,
            double max_move, GeometryImage& im, Remesh& r) {
   const int nv = r.mesh.num_vertices();
-  std::vector<Vec3d> anchor(nv);
-  for (std::size_t i = 0; i < im.group.size(); ++i)
-    if (r.sample_vertex[i] >= 0) anchor[r.sample_vertex[i]] = group_anchor[im.group[i]];
+  const std::vector<Vec3d> anchor = vertex_anchors(group_anchor, im, r);
   std::vector<Eigen::Triplet<double>> trip;
   trip.reserve(pts.size() * 9 + nv);
   Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(nv, 3);
@@ -215,14 +237,9 @@ void solve(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& group_anc
     x.col(d) = solver.solveWithGuess(rhs.col(d), guess);
   }
   std::vector<Vec3d> pos(nv);
-  for (int v = 0; v < nv; ++v) {
-    const Vec3d d = Vec3d{x(v, 0), x(v, 1), x(v, 2)} - anchor[v];
-    const double len = norm(d);
-    pos[v] = anchor[v] + (len > max_move ? d * (max_move / len) : d);
-  }
-  for (std::size_t i = 0; i < im.group.size(); ++i)
-    if (r.sample_vertex[i] >= 0) im.positions[i] = pos[r.sample_vertex[i]];
-  r = reconstruct(im);
+  for (int v = 0; v < nv; ++v) pos[v] = Vec3d{x(v, 0), x(v, 1), x(v, 2)};
+  clamp_moves(anchor, max_move, pos);
+  write_back(pos, im, r);
 }
 
 // Point-to-plane least squares (the closest-point passes): Σ area·(n·(Σ w_i x_i − target))²
@@ -238,9 +255,7 @@ void solve(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& group_anc
 void solve_plane(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& group_anchor, double lambda,
                  double max_move, GeometryImage& im, Remesh& r) {
   const int nv = r.mesh.num_vertices();
-  std::vector<Vec3d> anchor(nv);
-  for (std::size_t i = 0; i < im.group.size(); ++i)
-    if (r.sample_vertex[i] >= 0) anchor[r.sample_vertex[i]] = group_anchor[im.group[i]];
+  const std::vector<Vec3d> anchor = vertex_anchors(group_anchor, im, r);
   const std::size_t np = pts.size();
   // Compact copies of what the products read: the points' corners, weights, normals and areas,
   // and per vertex its (point, weight) incidences in point order.
@@ -333,12 +348,8 @@ void solve_plane(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& gro
     rz = rz2;
     for (int v = 0; v < nv; ++v) d[v] = z[v] + d[v] * beta;
   }
-  std::vector<Vec3d> pos(nv);
-  for (int v = 0; v < nv; ++v) {
-    const Vec3d dv = x[v] - anchor[v];
-    const double len = norm(dv);
-    pos[v] = anchor[v] + (len > max_move ? dv * (max_move / len) : dv);
-  }
+  std::vector<Vec3d> pos = std::move(x);
+  clamp_moves(anchor, max_move, pos);
   // Nothing but the pull resists sliding along the surface, so a triangle may turn over (horse
   // at 47k samples: edges with a dihedral angle over 90° 157 → 214 at a pull of 0.005). Such a
   // triangle's corners stay where they were, until no triangle turns (at worst every vertex
@@ -357,9 +368,7 @@ void solve_plane(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& gro
         }
     }
   }
-  for (std::size_t i = 0; i < im.group.size(); ++i)
-    if (r.sample_vertex[i] >= 0) im.positions[i] = pos[r.sample_vertex[i]];
-  r = reconstruct(im);
+  write_back(pos, im, r);
 }
 
 // Per full block, the diagonal whose two triangles lie closer to the original surface (squared
