@@ -160,7 +160,7 @@ void write_image(const std::string& path, const Image& image) {
                 std::to_string(image.height) + "x" + std::to_string(image.channels) + " with " +
                 std::to_string(image.pixels.size()) + " values");
 
-  const fs::path target(path);
+  const fs::path target(output_target(path));
   const std::string ext = lower_extension(path);
   if (ext.empty()) throw InputError(path, "output image needs an extension (.png, .jpg, .exr, ...)");
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
@@ -172,7 +172,7 @@ void write_image(const std::string& path, const Image& image) {
   // format), unique per process and call.
   static std::atomic<unsigned> counter{0};
   const fs::path tmp = dir / ("." + target.stem().string() + ".tmp" + std::to_string(::getpid()) + "-" +
-                              std::to_string(counter++) + target.extension().string());
+                              std::to_string(counter++) + fs::path(path).extension().string());
 
   const bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".pfm";
   int channels = image.channels;

@@ -232,11 +232,33 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
   throw InputError(path, "cannot write this format (expected .obj, .ply or .glb)");
 }
 
+std::string output_target(const std::string& path) {
+  // An output path that is a symbolic link is written through: the rename replaces the file the
+  // link points at, and the link stays (renaming over the link itself would replace it).
+  std::string p = path;
+  for (int hops = 0; hops < 40; ++hops) {
+    struct stat st;
+    if (::lstat(p.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) break;
+    std::string to(4096, '\0');
+    const ssize_t n = ::readlink(p.c_str(), &to[0], to.size());
+    if (n <= 0 || static_cast<std::size_t>(n) >= to.size()) break;
+    to.resize(static_cast<std::size_t>(n));
+    const auto slash = p.find_last_of('/');
+    p = to[0] == '/' || slash == std::string::npos ? to : p.substr(0, slash + 1) + to;
+  }
+  // Renaming over a device or a directory would replace it (as root, /dev/full became a file).
+  struct stat st;
+  if (::stat(p.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+    throw InputError(path, S_ISDIR(st.st_mode) ? "cannot write: is a directory" : "cannot write: not a regular file");
+  return p;
+}
+
 void write_file_atomic(const std::string& path, const std::string& data) {
   // pid + counter makes the name unique across processes and threads writing beside each
   // other; the same directory makes the final rename atomic.
   static std::atomic<unsigned> counter{0};
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+  const std::string target = output_target(path);
+  const std::string tmp = target + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) throw InputError(path, std::string("cannot write: ") + std::strerror(errno));
   bool ok = data.empty() || std::fwrite(data.data(), 1, data.size(), f) == data.size();
@@ -245,8 +267,8 @@ void write_file_atomic(const std::string& path, const std::string& data) {
     ok = false;
     err = errno;
   }
-  if (ok && OutputBatch::stage(tmp, path)) return;
-  if (ok && std::rename(tmp.c_str(), path.c_str()) != 0) {
+  if (ok && OutputBatch::stage(tmp, target)) return;
+  if (ok && std::rename(tmp.c_str(), target.c_str()) != 0) {
     ok = false;
     err = errno;
   }
@@ -292,12 +314,13 @@ bool OutputBatch::open() {
   return batch != nullptr;
 }
 
-std::string OutputBatch::current_path(const std::string& target) {
+std::string OutputBatch::current_path(const std::string& path) {
+  const std::string target = output_target(path);
   std::lock_guard<std::mutex> lock(batch_mutex);
   if (batch)
     for (const auto& [tmp, t] : batch->staged_)
       if (t == target) return tmp;
-  return target;
+  return path;
 }
 
 void OutputBatch::commit() {

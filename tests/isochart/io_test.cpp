@@ -1,5 +1,7 @@
 #include "isochart/io.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -662,12 +664,33 @@ TEST_CASE("an output batch lands all its files together or none", "[io]") {
   CHECK(read_bytes(d.file("b.txt")) == "second");
   CHECK(d.entries() == std::vector<std::string>{"a.ply", "b.txt"});
   {
-    // A directory in the way of one output: the commit fails before renaming any.
+    // A directory in the way of an output: refused at once, or, when it appears after the
+    // write, by the commit before it renames any.
     fs::create_directory(d.file("taken.txt"));
     OutputBatch batch;
     write_file_atomic(d.file("new.txt"), "x");
-    write_file_atomic(d.file("taken.txt"), "y");
+    CHECK_THROWS_WITH(write_file_atomic(d.file("taken.txt"), "y"), Catch::Contains("cannot write"));
+    write_file_atomic(d.file("later.txt"), "z");
+    fs::create_directory(d.file("later.txt"));
     CHECK_THROWS_WITH(batch.commit(), Catch::Contains("cannot write"));
   }
-  CHECK(d.entries() == std::vector<std::string>{"a.ply", "b.txt", "taken.txt"});
+  CHECK(d.entries() == std::vector<std::string>{"a.ply", "b.txt", "later.txt", "taken.txt"});
+  CHECK(fs::is_empty(d.file("later.txt")));
+}
+
+TEST_CASE("outputs are written through symbolic links, never over special files", "[io]") {
+  TempDir d;
+  fs::create_directory(d.file("real"));
+  fs::create_symlink("real/a.txt", d.file("a.txt"));
+  write_file_atomic(d.file("a.txt"), "through");
+  CHECK(fs::is_symlink(d.file("a.txt")));
+  CHECK(read_bytes(d.file("real/a.txt")) == "through");
+  CHECK(output_target(d.file("a.txt")) == d.file("real/a.txt"));
+  // A FIFO (like a device) would be replaced by the rename: refused, and left as it was.
+  REQUIRE(::mkfifo(d.file("pipe").c_str(), 0600) == 0);
+  fs::create_symlink("pipe", d.file("via_link.txt"));
+  CHECK_THROWS_WITH(write_file_atomic(d.file("pipe"), "x"), Catch::Contains("not a regular file"));
+  CHECK_THROWS_WITH(write_file_atomic(d.file("via_link.txt"), "x"), Catch::Contains("not a regular file"));
+  CHECK(fs::is_fifo(d.file("pipe")));
+  CHECK(d.entries() == std::vector<std::string>{"a.txt", "pipe", "real", "via_link.txt"});
 }

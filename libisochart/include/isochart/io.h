@@ -82,6 +82,12 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
 /// \throw InputError(path, "cannot write: REASON").
 void write_file_atomic(const std::string& path, const std::string& data);
 
+/// Where an output written to `path` lands: `path`, or the file its symbolic links lead to
+/// (outputs are written through links, which stay links).
+/// \throw InputError(path, "cannot write: ...") when that is a directory, a device or another
+///        file that is not a regular one (an atomic rename would replace it).
+std::string output_target(const std::string& path);
+
 /// All of a run's outputs, or none. While a batch is open, write_file_atomic, save_mesh and
 /// write_image leave each output in its temporary file; commit() renames them all into place,
 /// and a batch closed without commit() (a later step failed) removes them, so a failed run
