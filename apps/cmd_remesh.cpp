@@ -64,26 +64,10 @@ isochart::Mesh load_any(const Context& ctx, const std::string& path) {
 // or renumbered): the same bounding box within 0.1 % of its diagonal and the same area within
 // 1 %. Otherwise the remesh would be of another mesh, measured against this one.
 void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atlas, const std::string& file) {
-  auto box = [](const isochart::Mesh& m, isochart::Vec3d& lo, isochart::Vec3d& hi) {
-    lo = hi = m.positions.empty() ? isochart::Vec3d{} : m.positions[m.faces.empty() ? 0 : m.faces[0][0]];
-    for (const auto& f : m.faces)
-      for (int v : f) {
-        const isochart::Vec3d& p = m.positions[v];
-        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
-      }
-  };
-  auto area = [](const isochart::Mesh& m) {
-    double s = 0;
-    for (double x : isochart::face_areas(m)) s += x;
-    return s;
-  };
-  isochart::Vec3d lo_i, hi_i, lo_a, hi_a;
-  box(input, lo_i, hi_i);
-  box(atlas, lo_a, hi_a);
-  const double diag = isochart::norm(hi_i - lo_i);
-  const double off = std::max(isochart::norm(lo_a - lo_i), isochart::norm(hi_a - hi_i));
-  const double ai = area(input), aa = area(atlas);
+  const isochart::BoundingBox bi = isochart::bounding_box(input), ba = isochart::bounding_box(atlas);
+  const double diag = bi.diagonal();
+  const double off = std::max(isochart::norm(ba.min - bi.min), isochart::norm(ba.max - bi.max));
+  const double ai = isochart::surface_area(input), aa = isochart::surface_area(atlas);
   if (!(off <= 1e-3 * diag) || !(std::abs(aa - ai) <= 0.01 * ai)) {
     std::ostringstream msg;
     msg << "the atlas is not of the input mesh (bounding boxes " << off / diag * 100
