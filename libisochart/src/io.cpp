@@ -232,9 +232,9 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
   throw InputError(path, "cannot write this format (expected .obj, .ply or .glb)");
 }
 
-std::string output_target(const std::string& path) {
-  // An output path that is a symbolic link is written through: the rename replaces the file the
-  // link points at, and the link stays (renaming over the link itself would replace it).
+namespace {
+// The file `path`'s symbolic links lead to (`path` itself when it is none).
+std::string follow_links(const std::string& path) {
   std::string p = path;
   for (int hops = 0; hops < 40; ++hops) {
     struct stat st;
@@ -246,6 +246,14 @@ std::string output_target(const std::string& path) {
     const auto slash = p.find_last_of('/');
     p = to[0] == '/' || slash == std::string::npos ? to : p.substr(0, slash + 1) + to;
   }
+  return p;
+}
+}  // namespace
+
+std::string output_target(const std::string& path) {
+  // An output path that is a symbolic link is written through: the rename replaces the file the
+  // link points at, and the link stays (renaming over the link itself would replace it).
+  const std::string p = follow_links(path);
   // Renaming over a device or a directory would replace it (as root, /dev/full became a file).
   struct stat st;
   if (::stat(p.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
@@ -315,7 +323,8 @@ bool OutputBatch::open() {
 }
 
 std::string OutputBatch::current_path(const std::string& path) {
-  const std::string target = output_target(path);
+  // A lookup for reading: no writability check here.
+  const std::string target = follow_links(path);
   std::lock_guard<std::mutex> lock(batch_mutex);
   if (batch)
     for (const auto& [tmp, t] : batch->staged_)
