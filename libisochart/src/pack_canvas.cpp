@@ -368,6 +368,25 @@ Candidate Canvas::best_inside(const ChartRaster* rasters, int count) const {
           tasks.push_back({k, x, y, std::min(xmax, x + kBlock - 1), std::min(ymax, y + kBlock - 1)});
     }
   }
+  // All rotations of one region of the canvas are searched together: the rotations' tasks
+  // read the same rows of the occupancy and free-square maps, which then stay in cache (the
+  // maps of a 1024² packing are megabytes; rotation by rotation, each pass re-read them).
+  // A counting sort by tile keeps this linear; the order changes no result (see `better`).
+  {
+    constexpr int kTileShift = 5;  // 32-texel tiles
+    const int tx0 = box_.x >> kTileShift, ty0 = box_.y >> kTileShift;
+    const int tiles_x = ((box_.x + box_.w) >> kTileShift) - tx0 + 1;
+    const int tiles_y = ((box_.y + box_.h) >> kTileShift) - ty0 + 1;
+    std::vector<int> start(static_cast<std::size_t>(tiles_x) * tiles_y + 1, 0);
+    auto tile = [&](const Task& t) {
+      return static_cast<std::size_t>((t.y0 >> kTileShift) - ty0) * tiles_x + ((t.x0 >> kTileShift) - tx0);
+    };
+    for (const Task& t : tasks) ++start[tile(t) + 1];
+    for (std::size_t i = 1; i < start.size(); ++i) start[i] += start[i - 1];
+    std::vector<Task> sorted(tasks.size());
+    for (const Task& t : tasks) sorted[start[tile(t)]++] = t;
+    tasks.swap(sorted);
+  }
   // A total order on candidates: higher contact fraction, then lower y, x, rotation.
   auto better = [](const Candidate& a, const Candidate& b) {
     if (!b.valid) return a.valid;
