@@ -46,6 +46,30 @@ struct Context {
   std::shared_ptr<ProgressState> progress_state;
 };
 
+/// CLI11's own PositiveNumber prints the range 0 .. DBL_MAX in full; this names the rule.
+inline const CLI::Validator positive{
+    [](std::string& v) {
+      try {
+        std::size_t used = 0;
+        const double x = std::stod(v, &used);
+        if (used == v.size() && x > 0 && x <= 1e300) return std::string();
+      } catch (const std::exception&) {
+      }
+      return "expected a positive number, got '" + v + "'";
+    },
+    "POSITIVE"};
+
+/// A seed: 0 .. 2^64 − 1 in decimal. CLI11 would take "-1" or a 30-digit number silently
+/// (wrapped or saturated), and a run could not be repeated from its printed seed.
+inline const CLI::Validator seed_value{
+    [](std::string& v) {
+      const bool digits = !v.empty() && v.size() <= 20 &&
+                          v.find_first_not_of("0123456789") == std::string::npos;
+      if (digits && (v.size() < 20 || v <= "18446744073709551615")) return std::string();
+      return "expected an integer from 0 to 18446744073709551615, got '" + v + "'";
+    },
+    "UINT64"};
+
 /// A subcommand: registers its options on `sub` and returns the action to run.
 using Action = std::function<void()>;
 

@@ -188,11 +188,11 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--scale", args->scale,
                   "Exemplar pixels per unit of surface length (default: the exemplar spans a tenth of the "
                   "bounding-box diagonal)")
-      ->check(CLI::PositiveNumber);
+      ->check(cli::positive);
   sub->add_option("--pixels-per-texel", args->pixels_per_texel,
                   "Instead of --scale: exemplar pixels per texel of the finest level (1 = the exemplar at "
                   "full resolution)")
-      ->check(CLI::PositiveNumber);
+      ->check(cli::positive);
   sub->add_option("--direction", args->direction, "Exemplar x axis on the surface, x,y,z (default: smooth field)")
       ->delimiter(',');
   sub->add_option("--levels", args->levels, "MCGIM pyramid resolutions, any order (default 256,128,64,32)")

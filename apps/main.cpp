@@ -20,7 +20,8 @@ int main(int argc, char** argv) {
   app.fallthrough();  // global options may follow the subcommand
   app.add_option("--threads", ctx.opts.threads, "Worker threads (0 = all cores)")
       ->check(CLI::Range(0, 1024));
-  app.add_option("--seed", ctx.opts.seed, "Seed for every random choice (results depend only on it)");
+  app.add_option("--seed", ctx.opts.seed, "Seed for every random choice (results depend only on it)")
+      ->check(cli::seed_value);
   app.add_flag("-q,--quiet", ctx.opts.quiet, "No warnings or progress on stderr");
   app.add_flag("-v,--verbose", ctx.opts.verbose, "More detail on stderr");
   app.add_flag("--json", ctx.opts.json, "Print the result as one JSON object on stdout");
@@ -48,6 +49,26 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
+    // "A subcommand is required" for `isocharts bogus`: name the word that is not a command.
+    if (app.get_subcommands().empty()) {
+      std::string names;
+      for (const CLI::App* sub : app.get_subcommands({}))
+        if (!sub->get_group().empty()) names += (names.empty() ? "" : ", ") + sub->get_name();
+      for (int i = 1; i < argc; ++i) {
+        const std::string arg = argv[i];
+        if (arg == "--threads" || arg == "--seed" || arg == "--report") {
+          ++i;  // its value
+          continue;
+        }
+        if (!arg.empty() && arg[0] == '-') continue;
+        std::cerr << "isocharts: error: unknown command '" << arg << "' (commands: " << names << ")\n";
+        return 2;
+      }
+      if (dynamic_cast<const CLI::RequiredError*>(&e)) {
+        std::cerr << "isocharts: error: no command given (commands: " << names << "; see isocharts --help)\n";
+        return 2;
+      }
+    }
     std::cerr << "isocharts: error: " << e.what() << "\n";
     return 2;
   }

@@ -287,6 +287,29 @@ TEST_CASE("a run that fails at its last output leaves none of its outputs", "[cl
   CHECK(fs::is_empty(tmp.path / "r.json"));
 }
 
+TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]") {
+  TempDir tmp("badopts");
+  const fs::path err = tmp.path / "err.txt";
+  const fs::path out = tmp.path / "a.obj";
+  auto line = [&] { return read_bytes(err); };
+  CHECK(run_cli("--threads 2 bogus x", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: unknown command 'bogus' (commands: info, stats, render, "
+                                   "atlas, remesh, psnr, synth, bench, sae)\n"));
+  CHECK(run_cli("", err) == 2);
+  CHECK_THAT(line(), Catch::StartsWith("isocharts: error: no command given"));
+  // A seed that cannot be repeated from what was typed (wrapped or saturated) is refused.
+  for (const std::string seed : {"-1", "18446744073709551616", "1e3", "0x10"}) {
+    CHECK(run_cli("atlas builtin:sphere -o '" + out.string() + "' --seed " + seed, err) == 2);
+    CHECK_THAT(line(), Catch::Equals("isocharts: error: --seed: expected an integer from 0 to "
+                                     "18446744073709551615, got '" + seed + "'\n"));
+  }
+  CHECK(run_cli("synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --scale 0", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --scale: expected a positive number, got '0'\n"));
+  CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt"});
+  // The largest seed is a seed.
+  CHECK(run_cli("-q info builtin:sphere --seed 18446744073709551615", err) == 0);
+}
+
 TEST_CASE("a PNG cut short gets our one-line error instead of libpng's", "[cli]") {
   TempDir tmp("cut_png");
   const fs::path err = tmp.path / "err.txt", png = tmp.path / "v.png", cut = tmp.path / "cut.png";
