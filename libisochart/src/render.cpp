@@ -517,39 +517,23 @@ Image render_uv_layout(const Mesh& mesh, int width, int height) {
   const double ox = 0.5 * (W - du * scale), oy = 0.5 * (H - dv * scale);
   auto to_px = [&](const Vec2d& uv) { return Vec2d{ox + (uv.x - lo.x) * scale, oy + (hi.y - uv.y) * scale}; };
 
-  std::vector<float> buf(3 * static_cast<std::size_t>(W) * H, 1.0f);
-  // Fill.
+  // Segments to draw, in drawing order: the unit square, edges inside a chart thin and faint
+  // (fainter when triangles are only a few pixels big, so dense charts keep their colour), then
+  // chart boundaries (seams and mesh borders) dark.
+  struct Segment {
+    Vec2d a, b;
+    double half_width;
+    Vec3d col;
+    double alpha;
+  };
   double edge_length_sum = 0;
+  std::vector<std::array<Vec2d, 3>> tri_px(mesh.num_faces());
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const auto& t = mesh.face_uvs[f];
     const Vec2d a = to_px(mesh.uvs[t[0]]), b = to_px(mesh.uvs[t[1]]), c = to_px(mesh.uvs[t[2]]);
+    tri_px[f] = {a, b, c};
     edge_length_sum += norm(b - a) + norm(c - b) + norm(a - c);
-    const double area2 = cross(b - a, c - a);
-    if (!(std::abs(area2) > 1e-12)) continue;
-    const int xa = std::max(0, static_cast<int>(std::ceil(std::min({a.x, b.x, c.x}) - 0.5)));
-    const int xb = std::min(W - 1, static_cast<int>(std::floor(std::max({a.x, b.x, c.x}) - 0.5)));
-    const int ya = std::max(0, static_cast<int>(std::ceil(std::min({a.y, b.y, c.y}) - 0.5)));
-    const int yb = std::min(H - 1, static_cast<int>(std::floor(std::max({a.y, b.y, c.y}) - 0.5)));
-    const Vec3d& col = colors[chart[f]];
-    for (int y = ya; y <= yb; ++y)
-      for (int x = xa; x <= xb; ++x) {
-        const Vec2d p{x + 0.5, y + 0.5};
-        const double l0 = cross(c - b, p - b) / area2, l1 = cross(a - c, p - c) / area2;
-        if (l0 < 0 || l1 < 0 || 1 - l0 - l1 < 0) continue;
-        float* px = &buf[3 * (static_cast<std::size_t>(y) * W + x)];
-        px[0] = static_cast<float>(col.x);
-        px[1] = static_cast<float>(col.y);
-        px[2] = static_cast<float>(col.z);
-      }
   }
-  if (unit_square) {
-    const Vec2d corners[4] = {to_px({0, 0}), to_px({1, 0}), to_px({1, 1}), to_px({0, 1})};
-    for (int i = 0; i < 4; ++i)
-      draw_segment(buf, W, H, corners[i], corners[(i + 1) % 4], 0.5 * ss, {0.6, 0.6, 0.6}, 1);
-  }
-
-  // Edges: inside a chart thin and faint (fainter when triangles are only a few pixels big,
-  // so dense charts keep their colour); chart boundaries (seams and mesh borders) dark.
   const Topology topo(mesh);
   auto same_uv_across = [&](int f, int k, int g) {
     const int a = mesh.faces[f][k], b = mesh.faces[f][(k + 1) % 3];
@@ -564,35 +548,74 @@ Image render_uv_layout(const Mesh& mesh, int width, int height) {
   };
   const double mean_edge_px = edge_length_sum / (3.0 * mesh.num_faces()) / ss;
   const double inner_alpha = std::clamp((mean_edge_px - 1.5) / 8.0, 0.12, 0.55);
-  std::vector<std::array<Vec2d, 2>> boundary;
+  std::vector<Segment> segments, boundary;
+  if (unit_square) {
+    const Vec2d corners[4] = {to_px({0, 0}), to_px({1, 0}), to_px({1, 1}), to_px({0, 1})};
+    for (int i = 0; i < 4; ++i) segments.push_back({corners[i], corners[(i + 1) % 4], 0.5 * ss, {0.6, 0.6, 0.6}, 1});
+  }
   for (int f = 0; f < mesh.num_faces(); ++f) {
     for (int k = 0; k < 3; ++k) {
       const IndexRange faces = topo.edge_faces(topo.face_edge(f, k));
       int other = -1;
       if (faces.size() == 2) other = faces[0] == f ? faces[1] : faces[0];
-      const Vec2d a = to_px(mesh.uvs[mesh.face_uvs[f][k]]),
-                  b = to_px(mesh.uvs[mesh.face_uvs[f][(k + 1) % 3]]);
+      const Vec2d a = tri_px[f][k], b = tri_px[f][(k + 1) % 3];
       const bool inner = other >= 0 && chart[other] == chart[f] && same_uv_across(f, k, other);
-      if (!inner) {
-        boundary.push_back({a, b});
-      } else if (f < other) {
-        draw_segment(buf, W, H, a, b, 0.3 * ss, colors[chart[f]] * 0.45, inner_alpha);
-      }
+      if (!inner)
+        boundary.push_back({a, b, 0.6 * ss, {0.1, 0.1, 0.12}, 1});
+      else if (f < other)
+        segments.push_back({a, b, 0.3 * ss, colors[chart[f]] * 0.45, inner_alpha});
     }
   }
-  for (const auto& seg : boundary) draw_segment(buf, W, H, seg[0], seg[1], 0.6 * ss, {0.1, 0.1, 0.12}, 1);
+  segments.insert(segments.end(), boundary.begin(), boundary.end());
 
+  // Bands of rows in parallel: fill, then the segments, then the box filter into the output.
+  // The supersampled buffer covers one band at a time per worker.
   Image out(width, height, 3);
   const float norm_factor = 1.0f / (ss * ss);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      for (int k = 0; k < 3; ++k) {
-        float sum = 0;
-        for (int sy = 0; sy < ss; ++sy)
-          for (int sx = 0; sx < ss; ++sx)
-            sum += buf[3 * (static_cast<std::size_t>(y * ss + sy) * W + x * ss + sx) + k];
-        out.at(x, y, k) = sum * norm_factor;
-      }
+  constexpr int kBandRows = 32;  // output rows per band
+  const int bands = (height + kBandRows - 1) / kBandRows;
+  tbb::parallel_for(0, bands, [&](int band) {
+    const int oy0 = band * kBandRows, oy1 = std::min(height, oy0 + kBandRows);
+    const int y0 = oy0 * ss, y1 = oy1 * ss;
+    // Rows [y0, y1) of the W × H picture, stored from row 0 of `buf`; drawing shifts by y0.
+    std::vector<float> buf(3 * static_cast<std::size_t>(W) * (y1 - y0), 1.0f);
+    const Vec2d shift{0, static_cast<double>(y0)};
+    for (int f = 0; f < mesh.num_faces(); ++f) {
+      const Vec2d a = tri_px[f][0], b = tri_px[f][1], c = tri_px[f][2];
+      const double area2 = cross(b - a, c - a);
+      if (!(std::abs(area2) > 1e-12)) continue;
+      const int ya = std::max(y0, static_cast<int>(std::ceil(std::min({a.y, b.y, c.y}) - 0.5)));
+      const int yb = std::min(y1 - 1, static_cast<int>(std::floor(std::max({a.y, b.y, c.y}) - 0.5)));
+      if (ya > yb) continue;
+      const int xa = std::max(0, static_cast<int>(std::ceil(std::min({a.x, b.x, c.x}) - 0.5)));
+      const int xb = std::min(W - 1, static_cast<int>(std::floor(std::max({a.x, b.x, c.x}) - 0.5)));
+      const Vec3d& col = colors[chart[f]];
+      for (int y = ya; y <= yb; ++y)
+        for (int x = xa; x <= xb; ++x) {
+          const Vec2d p{x + 0.5, y + 0.5};
+          const double l0 = cross(c - b, p - b) / area2, l1 = cross(a - c, p - c) / area2;
+          if (l0 < 0 || l1 < 0 || 1 - l0 - l1 < 0) continue;
+          float* px = &buf[3 * (static_cast<std::size_t>(y - y0) * W + x)];
+          px[0] = static_cast<float>(col.x);
+          px[1] = static_cast<float>(col.y);
+          px[2] = static_cast<float>(col.z);
+        }
+    }
+    for (const Segment& g : segments) {
+      const double r = g.half_width + 1;
+      if (std::max(g.a.y, g.b.y) + r < y0 || std::min(g.a.y, g.b.y) - r >= y1) continue;
+      draw_segment(buf, W, y1 - y0, g.a - shift, g.b - shift, g.half_width, g.col, g.alpha);
+    }
+    for (int y = oy0; y < oy1; ++y)
+      for (int x = 0; x < width; ++x)
+        for (int k = 0; k < 3; ++k) {
+          float sum = 0;
+          for (int sy = 0; sy < ss; ++sy)
+            for (int sx = 0; sx < ss; ++sx)
+              sum += buf[3 * (static_cast<std::size_t>((y - oy0) * ss + sy) * W + x * ss + sx) + k];
+          out.at(x, y, k) = sum * norm_factor;
+        }
+  });
   return out;
 }
 
