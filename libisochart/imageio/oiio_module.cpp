@@ -4,7 +4,10 @@
 // OIIO keeps per-thread and global error strings; every failure path reads them (which also
 // clears them, so OIIO does not complain at exit).
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
+
+#include <cerrno>
 
 #include <algorithm>
 #include <cctype>
@@ -14,6 +17,7 @@
 #include <cstring>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "../src/image_module.h"
 
@@ -126,6 +130,17 @@ int read_file(const char* path, long long max_values, int* width, int* height, i
   return kIsochartsImageOk;
 }
 
+// Writes `bytes` to `path`, every call checked. 0 or errno.
+int write_bytes(const char* path, const std::vector<unsigned char>& bytes) {
+  std::FILE* f = std::fopen(path, "wb");
+  if (!f) return errno ? errno : EIO;
+  int err = 0;
+  if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), f) != bytes.size()) err = errno ? errno : EIO;
+  if (std::fflush(f) != 0 && !err) err = errno ? errno : EIO;
+  if (std::fclose(f) != 0 && !err) err = errno ? errno : EIO;
+  return err;
+}
+
 int write_file(const char* path, int width, int height, int channels, int stride, const float* pixels,
                int as_float, int alpha, const char* names, const char* const* attributes, char* message,
                std::size_t message_size) {
@@ -134,6 +149,13 @@ int write_file(const char* path, int width, int height, int channels, int stride
     OIIO::geterror();  // names the file; the caller's message names the format
     return report(kIsochartsImageUnsupported, "unsupported image format", message, message_size);
   }
+  // PNG and JPEG are encoded into memory and written here: on a failed write (a full disk)
+  // libjpeg's error handler prints its own line and exits the process, and libpng drops the
+  // error and reports success with the file cut short. Both are small next to their pixels.
+  const int complete_check = trailer_complete(path);
+  std::vector<unsigned char> encoded;
+  OIIO::Filesystem::IOVecOutput memory(encoded);
+  const bool in_memory = complete_check >= 0 && out->supports("ioproxy") && out->set_ioproxy(&memory);
   OIIO::ImageSpec spec(width, height, channels, as_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
   spec.alpha_channel = alpha;
   // Our pixels have straight alpha; without this the writer would divide colours by alpha.
@@ -161,6 +183,11 @@ int write_file(const char* path, int width, int height, int channels, int stride
   if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels, xstride)) return fail(out->geterror());
   if (!out->close()) return fail(out->geterror());
   out.reset();
+  if (in_memory) {
+    const int err = write_bytes(path, encoded);
+    if (err) return fail(std::strerror(err));
+    return kIsochartsImageOk;
+  }
   // Some writers (PNG among them) drop the errors of their last writes, e.g. on a full disk, and
   // report success with the file cut short: check its end marker. Other formats' writers
   // (OpenEXR, TIFF) report write errors themselves; their header is re-read as a cheap check,

@@ -204,8 +204,11 @@ void write_image(const std::string& path, const Image& image) {
     throw InputError(path, "unsupported image format '" + ext + "' (use .png, .jpg, .exr, .tif, ...)");
   if (status != kIsochartsImageOk) {
     fs::remove(tmp, ec);
-    throw Error(message[0] ? "cannot write image " + path + " (" + message + ")"
-                           : "cannot write image " + path);
+    // The writers name the file they wrote, our temporary one; the user knows only `path`.
+    std::string detail = message;
+    for (std::size_t at; (at = detail.find(tmp.string())) != std::string::npos;)
+      detail.replace(at, tmp.string().size(), path);
+    throw Error(detail.empty() ? "cannot write image " + path : "cannot write image " + path + " (" + detail + ")");
   }
   if (OutputBatch::stage(tmp.string(), target.string())) return;
   fs::rename(tmp, target, ec);

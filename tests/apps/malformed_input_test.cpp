@@ -310,6 +310,30 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(run_cli("-q info builtin:sphere --seed 18446744073709551615", err) == 0);
 }
 
+TEST_CASE("a write that fails midway (file size limit, as on a full disk) is one line, nothing left", "[cli]") {
+  TempDir tmp("fsize");
+  const fs::path err = tmp.path / "err.txt";
+  const fs::path outdir = tmp.path / "out";
+  fs::create_directory(outdir);
+  // Writes past 16 KiB fail with EFBIG (SIGXFSZ ignored), the way they fail on a full disk.
+  // libjpeg used to print its own line and exit the process; libpng to report success.
+  for (const std::string ext : {"png", "jpg", "exr", "tif"}) {
+    const fs::path out = outdir / ("view." + ext);
+    CAPTURE(ext);
+    const int status = std::system(("sh -c \"trap '' XFSZ; ulimit -f 16; exec '" + std::string(ISOCHARTS_CLI) +
+                                    "' render builtin:creature -o '" + out.string() +
+                                    "' --width 800 --height 800 -q\" > /dev/null 2> '" + err.string() + "'")
+                                       .c_str());
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 1);
+    const std::string line = read_bytes(err);
+    CHECK_THAT(line, Catch::StartsWith("isocharts: error: cannot write image " + out.string() + " ("));
+    CHECK(std::count(line.begin(), line.end(), '\n') == 1);
+    CHECK(line.find(".tmp") == std::string::npos);  // the temporary file is ours, not the user's
+    CHECK(entries(outdir).empty());
+  }
+}
+
 TEST_CASE("a PNG cut short gets our one-line error instead of libpng's", "[cli]") {
   TempDir tmp("cut_png");
   const fs::path err = tmp.path / "err.txt", png = tmp.path / "v.png", cut = tmp.path / "cut.png";
