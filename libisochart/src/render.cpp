@@ -7,6 +7,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -616,6 +618,12 @@ Image render_uv_layout(const Mesh& mesh, int width, int height) {
           out.at(x, y, k) = sum * norm_factor;
         }
   });
+  tri_px = {};
+  segments = {};
+  boundary = {};
+  // The drawing's tens of megabytes in pieces stay with malloc after they are freed; give them
+  // back before the caller loads the image writer (itself ~100 MB), or they add to the peak.
+  malloc_trim(0);
   return out;
 }
 
