@@ -282,7 +282,9 @@ void write_file_atomic(const std::string& path, const std::string& data) {
   }
   if (!ok) {
     std::remove(tmp.c_str());
-    throw InputError(path, std::string("cannot write: ") + std::strerror(err));
+    // The file could be created, so the path was fine: the system failed (a full disk, an I/O
+    // error), as when an image write fails: exit 1, not the bad-input 2.
+    throw Error(path + ": cannot write: " + std::strerror(err));
   }
 }
 

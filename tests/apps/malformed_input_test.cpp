@@ -332,6 +332,19 @@ TEST_CASE("a write that fails midway (file size limit, as on a full disk) is one
     CHECK(line.find(".tmp") == std::string::npos);  // the temporary file is ours, not the user's
     CHECK(entries(outdir).empty());
   }
+  // Meshes: the same failure is not the input's fault either (exit 1, not 2).
+  for (const std::string ext : {"obj", "ply", "glb"}) {
+    const fs::path out = outdir / ("sphere." + ext);
+    CAPTURE(ext);
+    const int status = std::system(("sh -c \"trap '' XFSZ; ulimit -f 16; exec '" + std::string(ISOCHARTS_CLI) +
+                                    "' -q atlas builtin:sphere -o '" + out.string() + "'\" > /dev/null 2> '" +
+                                    err.string() + "'")
+                                       .c_str());
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 1);
+    CHECK_THAT(read_bytes(err), Catch::Equals("isocharts: error: " + out.string() + ": cannot write: File too large\n"));
+    CHECK(entries(outdir).empty());
+  }
 }
 
 TEST_CASE("a PNG cut short gets our one-line error instead of libpng's", "[cli]") {
