@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <string>
 
+#include "isochart/atlas.h"
 #include "isochart/builtin.h"
 #include "isochart/error.h"
 #include "isochart/image.h"
@@ -289,6 +290,21 @@ TEST_CASE("UV layout draws charts on white with dark boundaries", "[render]") {
   CHECK(hue_clusters(img) == 2);
   // Chart boundaries (the discs' rims) are dark.
   CHECK(count_pixels(img, 0.3f) > 100);
+}
+
+TEST_CASE("the UV layout is drawn the same for any thread count", "[render]") {
+  // Bands of rows are drawn in parallel; a band shorter than the others at the bottom and
+  // segments crossing band borders must blend exactly as in one pass.
+  const Mesh m = make_builtin("sphere");
+  AtlasOptions ao;
+  ao.pack.width = ao.pack.height = 256;
+  const Atlas atlas = build_atlas(m, ao);
+  const Mesh uv = atlas.apply_to(m);
+  Image one, two;
+  tbb::task_arena(1).execute([&] { one = render_uv_layout(uv, 301, 203); });
+  tbb::task_arena(2).execute([&] { two = render_uv_layout(uv, 301, 203); });
+  CHECK(one.pixels == two.pixels);
+  CHECK(count_pixels(one, 0.3f) > 500);  // boundaries drawn
 }
 
 TEST_CASE("render input errors", "[render]") {
