@@ -54,17 +54,22 @@ int main(int argc, char** argv) {
       std::string names;
       for (const CLI::App* sub : app.get_subcommands({}))
         if (!sub->get_group().empty()) names += (names.empty() ? "" : ", ") + sub->get_name();
-      for (int i = 1; i < argc; ++i) {
+      bool command_word = false;
+      for (int i = 1; i < argc && !command_word; ++i) {
         const std::string arg = argv[i];
         if (arg == "--threads" || arg == "--seed" || arg == "--report") {
           ++i;  // its value
           continue;
         }
         if (!arg.empty() && arg[0] == '-') continue;
+        bool known = false;
+        for (const CLI::App* sub : app.get_subcommands({})) known = known || sub->check_name(arg);
+        command_word = true;
+        if (known) break;  // a command after all: CLI11's own message says what is wrong
         std::cerr << "isocharts: error: unknown command '" << arg << "' (commands: " << names << ")\n";
         return 2;
       }
-      if (dynamic_cast<const CLI::RequiredError*>(&e)) {
+      if (!command_word && dynamic_cast<const CLI::RequiredError*>(&e)) {
         std::cerr << "isocharts: error: no command given (commands: " << names << "; see isocharts --help)\n";
         return 2;
       }
