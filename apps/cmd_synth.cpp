@@ -66,6 +66,11 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
     if (!std::isfinite(n2) || !(n2 > 0)) bad_option("--direction must be a finite, non-zero vector x,y,z");
   }
   if (std::isnan(a.coherence)) bad_option("--coherence must be a number");
+  // Checked here, not only in the library, so that a typo fails before the atlas is built.
+  if (a.neighborhood % 2 == 0) bad_option("--neighborhood must be odd (3, 5, 7, ...), not " + std::to_string(a.neighborhood));
+  if (a.coarse_neighborhood % 2 == 0)
+    bad_option("--coarse-neighborhood must be odd (1, 3, 5, ...), not " + std::to_string(a.coarse_neighborhood));
+  if (a.scale > 0 && a.pixels_per_texel > 0) bad_option("--scale and --pixels-per-texel are exclusive");
   const isochart::Image exemplar = synth::exemplar_from(a.exemplar);
 
   const std::string prefix = "builtin:";
@@ -94,7 +99,6 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   synth::SynthOptions so;
   so.scale = a.scale;
   so.pixels_per_texel = a.pixels_per_texel;
-  if (a.scale > 0 && a.pixels_per_texel > 0) bad_option("--scale and --pixels-per-texel are exclusive");
   if (!a.direction.empty()) so.direction = {a.direction[0], a.direction[1], a.direction[2]};
   so.neighborhood = a.neighborhood;
   so.coarse_neighborhood = a.coarse_neighborhood;
@@ -107,7 +111,18 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   so.start_level = a.start_level;
   if (a.symmetry >= 1) so.direction_symmetry = a.symmetry;
   so.seed = ctx.opts.seed;
-  const synth::SynthResult r = synth::synthesize(atlas, pyramid, exemplar, so, ctx.progress());
+  synth::SynthResult r;
+  try {
+    r = synth::synthesize(atlas, pyramid, exemplar, so, ctx.progress());
+  } catch (const isochart::InputError& e) {
+    // The library's scale floor depends on the built pyramid; name the option that set it.
+    const std::string what = e.what();
+    if (!e.file().empty() || what.rfind("exemplar scale", 0) != 0) throw;
+    std::ostringstream opt;
+    if (a.pixels_per_texel > 0) opt << "--pixels-per-texel " << a.pixels_per_texel << ": ";
+    else if (a.scale > 0) opt << "--scale " << a.scale << ": ";
+    bad_option(opt.str() + what);
+  }
 
   const auto tt = std::chrono::steady_clock::now();
   const isochart::Image atlas_tex = synth::transfer_to_atlas(atlas, pyramid[0], r.texture, a.atlas_size,

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <deque>
 #include <limits>
 #include <numeric>
@@ -537,6 +538,38 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   res.scale = o.pixels_per_texel > 0 && pyramid[0].stats.texel_size > 0 ? o.pixels_per_texel / pyramid[0].stats.texel_size
               : o.scale > 0                                               ? o.scale
                                         : exemplar.width / (0.1 * isochart::bounding_box(atlas).diagonal());
+
+  // An exemplar magnified past the size of the finest level's whole image would be copied as
+  // one blown-up piece, and its pyramid (and the neighbourhoods searched in it) would not fit
+  // in memory for scales a little smaller still: the scale has a floor. The default scale is
+  // raised to it; a scale asked for below it is refused, saying what it would have cost.
+  {
+    double finest_texel = 0, level_pixels = 0;
+    for (const mcgim::Level& lv : pyramid) {
+      if (lv.stats.texel_size > 0 && (finest_texel == 0 || lv.stats.texel_size < finest_texel))
+        finest_texel = lv.stats.texel_size;
+      level_pixels = std::max(level_pixels, double(lv.image.width) * lv.image.height);
+    }
+    const double ex_pixels = double(exemplar.width) * exemplar.height;
+    const double max_pixels = std::max(ex_pixels, level_pixels);
+    const double min_factor = std::sqrt(ex_pixels / max_pixels);  // ≤ 1: at most this magnification
+    if (finest_texel > 0 && res.scale * finest_texel < min_factor * (1 - 1e-9)) {
+      const double min_scale = min_factor / finest_texel;
+      if (o.scale <= 0 && o.pixels_per_texel <= 0) {
+        res.scale = min_scale;
+      } else {
+        const double f = res.scale * finest_texel;
+        char buf[400];
+        std::snprintf(buf, sizeof buf,
+                      "exemplar scale too small: the %dx%d exemplar would be magnified to %.3gx%.3g pixels at "
+                      "the finest level, larger than that level's whole %.0f-sample image; the smallest scale "
+                      "is %.4g exemplar pixels per unit length (%.4g pixels per texel)",
+                      exemplar.width, exemplar.height, exemplar.width / f, exemplar.height / f, level_pixels,
+                      min_scale, min_factor);
+        throw isochart::InputError("", buf);
+      }
+    }
+  }
 
   // Exemplar pyramid: one level per MCGIM level, a pixel the size of that level's texel.
   std::vector<double> factors(nl);

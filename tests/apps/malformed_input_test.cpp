@@ -305,6 +305,18 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   }
   CHECK(run_cli("synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --scale 0", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --scale: expected a positive number, got '0'\n"));
+  // An even neighbourhood is refused before any work.
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --neighborhood 4", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --neighborhood must be odd (3, 5, 7, ...), not 4\n"));
+  // A scale that would magnify the exemplar past the finest level's whole image used to run
+  // out of memory (--scale 1: 15 GB); it is refused with the smallest scale that works.
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() +
+                    "' --levels 64,32 --pixels-per-texel 0.001",
+                err) == 2);
+  const std::string scale_line = line();
+  CHECK_THAT(scale_line, Catch::StartsWith("isocharts: error: --pixels-per-texel 0.001: exemplar scale too small") &&
+                             Catch::Contains("the smallest scale is") && Catch::EndsWith("pixels per texel)\n"));
+  CHECK(std::count(scale_line.begin(), scale_line.end(), '\n') == 1);
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt"});
   // The largest seed is a seed.
   CHECK(run_cli("-q info builtin:sphere --seed 18446744073709551615", err) == 0);
