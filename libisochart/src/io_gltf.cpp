@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <map>
 #include <sstream>
@@ -404,6 +405,49 @@ void pad4(std::vector<unsigned char>& buf) {
 }
 
 }  // namespace
+
+// glTF keeps one vertex per combination of attributes, so a mesh arrives cut open along its
+// UV and normal seams (every atlas we write is). Corners at bit-identical positions are
+// joined again, texture coordinates staying per corner; where that joins surfaces that only
+// touch, validation splits the non-manifold vertex or edge apart as for any other file.
+void weld_equal_positions(RawMesh& raw) {
+  struct Key {
+    std::uint64_t b[3];
+    bool operator==(const Key& o) const { return b[0] == o.b[0] && b[1] == o.b[1] && b[2] == o.b[2]; }
+  };
+  struct Hash {
+    std::size_t operator()(const Key& k) const {
+      std::uint64_t h = 0x9e3779b97f4a7c15ull;
+      for (std::uint64_t x : k.b) h = (h ^ x) * 0xff51afd7ed558ccdull, h ^= h >> 32;
+      return static_cast<std::size_t>(h);
+    }
+  };
+  const std::size_t nv = raw.positions.size();
+  std::unordered_map<Key, int, Hash> first;
+  first.reserve(nv);
+  std::vector<int> to(nv);
+  std::vector<Vec3d> positions, normals, colors;
+  positions.reserve(nv);
+  for (std::size_t v = 0; v < nv; ++v) {
+    Key k{};
+    for (int i = 0; i < 3; ++i) {
+      const double x = raw.positions[v][i] == 0 ? 0.0 : raw.positions[v][i];  // −0 joins +0
+      std::memcpy(&k.b[i], &x, sizeof x);
+    }
+    const auto [it, inserted] = first.emplace(k, static_cast<int>(positions.size()));
+    to[v] = it->second;
+    if (!inserted) continue;
+    positions.push_back(raw.positions[v]);
+    if (!raw.normals.empty()) normals.push_back(raw.normals[v]);
+    if (!raw.colors.empty()) colors.push_back(raw.colors[v]);
+  }
+  if (positions.size() == nv) return;
+  for (auto& poly : raw.polygons)
+    for (int& v : poly) v = to[v];
+  raw.positions = std::move(positions);
+  if (!raw.normals.empty()) raw.normals = std::move(normals);
+  if (!raw.colors.empty()) raw.colors = std::move(colors);
+}
 
 RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, const LoadOptions& options) {
   if (data.size() > 0xffffffffu) throw InputError(path, "glTF file is larger than 4 GiB");

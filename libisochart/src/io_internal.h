@@ -15,6 +15,8 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
 RawMesh read_off(const std::string& path, std::string_view data, const LoadOptions& options);
 RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptions& options);
 RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, const LoadOptions& options);
+/// Joins vertices at bit-identical positions (glTF splits them at attribute seams).
+void weld_equal_positions(RawMesh& raw);
 
 // ---- Writers: return the file contents; save_mesh writes them atomically ----
 std::string obj_text(const Mesh& mesh, const std::string& mtl_file, bool write_groups);

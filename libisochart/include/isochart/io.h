@@ -49,7 +49,8 @@ struct LoadResult {
 ///        "face 3") for binary ones, empty, NaN/Inf, index out of range, too large, ...).
 LoadResult load_mesh(const std::string& path, const LoadOptions& options = {});
 
-/// Reads a file into a raw polygon soup without validation (what the file says).
+/// Reads a file into a raw polygon soup without validation (what the file says: glTF
+/// vertices split at UV and normal seams stay split; load_mesh joins those at equal positions).
 /// \throw InputError as load_mesh for file-level problems.
 RawMesh read_raw_mesh(const std::string& path, const LoadOptions& options = {});
 
