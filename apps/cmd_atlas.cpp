@@ -83,8 +83,13 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   }
   const auto t_out = std::chrono::steady_clock::now();
   for (const auto& out : a.outputs) isochart::save_mesh(out_mesh, out);
-  if (!a.png.empty())
-    isochart::write_image(a.png, isochart::render_uv_layout(out_mesh, a.png_size, a.png_size));
+  if (!a.png.empty()) {
+    // The picture has the texture's proportions, its longer side --png-size pixels.
+    const double aspect = static_cast<double>(a.options.pack.width) / a.options.pack.height;
+    const int pw = aspect >= 1 ? a.png_size : std::max(16, static_cast<int>(std::lround(a.png_size * aspect)));
+    const int ph = aspect >= 1 ? std::max(16, static_cast<int>(std::lround(a.png_size / aspect))) : a.png_size;
+    isochart::write_image(a.png, isochart::render_uv_layout(out_mesh, pw, ph, aspect));
+  }
   const auto& s = atlas.stats;
 
   nlohmann::json j;

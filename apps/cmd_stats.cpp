@@ -13,6 +13,7 @@ namespace {
 
 struct StatsArgs {
   std::string input;
+  double aspect = 1;
 };
 
 // JSON has no infinity: a flipped atlas reports null stretch.
@@ -23,12 +24,19 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
   isochart::LoadResult r = ctx.load(a.input);
   if (!r.mesh.has_uvs())
     throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
-  const isochart::AtlasQuality q = isochart::measure_atlas(r.mesh);
+  isochart::AtlasQuality q = isochart::measure_atlas(r.mesh);
+  if (a.aspect != 1) {
+    // Stretch in texels: a unit of u is `aspect` times as long as a unit of v on the texture.
+    isochart::Mesh texels = r.mesh;
+    for (isochart::Vec2d& uv : texels.uvs) uv.x *= a.aspect;
+    q.stretch = isochart::measure_stretch(texels);
+  }
 
   nlohmann::json j;
   j["file"] = a.input;
   j["faces"] = r.mesh.num_faces();
   j["charts"] = q.charts;
+  j["aspect"] = a.aspect;
   j["l2_stretch"] = finite_or_null(q.stretch.l2);
   j["linf_stretch"] = finite_or_null(q.stretch.linf);
   j["flipped"] = q.stretch.flipped;
@@ -60,6 +68,10 @@ void add_stats(CLI::App& app, Context& ctx, Action& action) {
   auto args = std::make_shared<StatsArgs>();
   CLI::App* sub = app.add_subcommand("stats", "Stretch, flips, overlaps, packing and seams of an atlas");
   sub->add_option("input", args->input, "Mesh with texture coordinates (OBJ vt, PLY/glTF UVs)")->required();
+  sub->add_option("--aspect", args->aspect,
+                  "Width / height of the texture the UVs address (stretch is measured in texels; "
+                  "default 1, a square texture)")
+      ->check(positive);
   sub->footer("Example: isocharts stats ../shared/data/baseline_atlases/bunny_uvatlas.obj");
   sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_stats(ctx, *args); }; });
 }

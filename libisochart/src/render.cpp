@@ -490,8 +490,10 @@ Image render_mesh(const Mesh& mesh, const RenderOptions& options) {
   return out;
 }
 
-Image render_uv_layout(const Mesh& mesh, int width, int height) {
+Image render_uv_layout(const Mesh& mesh, int width, int height, double texture_aspect) {
   if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates; there is no UV layout to draw");
+  if (!(texture_aspect > 0) || !std::isfinite(texture_aspect))
+    throw InputError("", "the texture aspect ratio of a UV layout must be a positive number");
   const int ss = 2;
   check_size(width, height, ss);
   check_mesh(mesh);
@@ -512,12 +514,15 @@ Image render_uv_layout(const Mesh& mesh, int width, int height) {
     lo = {0, 0};
     hi = {1, 1};
   }
-  const double du = std::max(hi.x - lo.x, 1e-12), dv = std::max(hi.y - lo.y, 1e-12);
+  // A unit of u is texture_aspect times as long as a unit of v on the texture.
+  const double du = std::max((hi.x - lo.x) * texture_aspect, 1e-12), dv = std::max(hi.y - lo.y, 1e-12);
   const int W = width * ss, H = height * ss;
   const double margin = 0.03 * std::min(W, H);
   const double scale = std::max(std::min((W - 2 * margin) / du, (H - 2 * margin) / dv), 1e-300);
   const double ox = 0.5 * (W - du * scale), oy = 0.5 * (H - dv * scale);
-  auto to_px = [&](const Vec2d& uv) { return Vec2d{ox + (uv.x - lo.x) * scale, oy + (hi.y - uv.y) * scale}; };
+  auto to_px = [&](const Vec2d& uv) {
+    return Vec2d{ox + (uv.x - lo.x) * texture_aspect * scale, oy + (hi.y - uv.y) * scale};
+  };
 
   // Segments to draw, in drawing order: the unit square, edges inside a chart thin and faint
   // (fainter when triangles are only a few pixels big, so dense charts keep their colour), then

@@ -15,19 +15,24 @@ namespace {
 
 // Everything an accepted atlas must satisfy, measured on the mesh with its final UVs.
 void check_atlas(const Mesh& mesh, const Atlas& atlas, const AtlasOptions& o) {
-  const Mesh m = atlas.apply_to(mesh);
-  REQUIRE(m.face_uvs.size() == mesh.faces.size());
-  const StretchStats st = measure_stretch(m);
-  CHECK(st.flipped == 0);
-  CHECK(overlapping_uv_pairs(m).empty());
-  CHECK(st.l2 <= o.max_l2 + 1e-9);
-  CHECK(st.linf <= o.max_linf + 1e-9);
-  for (const auto& uv : m.uvs) {
+  const Mesh uv_mesh = atlas.apply_to(mesh);
+  REQUIRE(uv_mesh.face_uvs.size() == mesh.faces.size());
+  for (const auto& uv : uv_mesh.uvs) {
     CHECK(uv.x >= 0);
     CHECK(uv.x <= 1);
     CHECK(uv.y >= 0);
     CHECK(uv.y <= 1);
   }
+  // Stretch is that of the texture: in texels, not in [0,1]² (they differ when W ≠ H).
+  Mesh m = uv_mesh;
+  for (auto& uv : m.uvs) uv = {uv.x * o.pack.width, uv.y * o.pack.height};
+  const StretchStats st = measure_stretch(m);
+  CHECK(st.flipped == 0);
+  CHECK(overlapping_uv_pairs(m).empty());
+  CHECK(st.l2 <= o.max_l2 + 1e-9);
+  CHECK(st.linf <= o.max_linf + 1e-9);
+  CHECK(atlas.stats.l2 == Approx(st.l2).epsilon(1e-12));
+  CHECK(atlas.stats.linf == Approx(st.linf).epsilon(1e-12));
   // Every chart is one disk-topology piece meeting both bounds on its own.
   for (int c = 0; c < atlas.num_charts(); ++c) {
     std::vector<int> faces;
@@ -57,6 +62,22 @@ TEST_CASE("atlas of a sphere meets the stretch bounds", "[atlas]") {
   // A closed surface needs at least two charts; a sphere should not need many.
   CHECK(a.num_charts() >= 2);
   CHECK(a.num_charts() <= 8);
+}
+
+TEST_CASE("a non-square texture keeps the charts undistorted in texels", "[atlas]") {
+  const Mesh sphere = make_builtin("sphere");
+  AtlasOptions square, wide;
+  wide.pack.width = 512;
+  wide.pack.height = 128;
+  const Atlas a = build_atlas(sphere, square), b = build_atlas(sphere, wide);
+  check_atlas(sphere, b, wide);
+  // Charting does not depend on the texture; packing only rotates, moves and scales
+  // uniformly in texels, so the reported stretch is that of the square texture's atlas.
+  CHECK(b.num_charts() == a.num_charts());
+  CHECK(b.stats.l2 == Approx(a.stats.l2).epsilon(1e-9));
+  CHECK(b.stats.linf == Approx(a.stats.linf).epsilon(1e-9));
+  // In [0,1]² the same UVs are stretched 4:1 (what used to be reported).
+  CHECK(measure_stretch(b.apply_to(sphere)).l2 > b.stats.l2 + 0.3);
 }
 
 TEST_CASE("atlas of an open disk patch is a single chart", "[atlas]") {

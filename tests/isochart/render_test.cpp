@@ -292,6 +292,29 @@ TEST_CASE("UV layout draws charts on white with dark boundaries", "[render]") {
   CHECK(count_pixels(img, 0.3f) > 100);
 }
 
+TEST_CASE("the UV layout of a non-square texture is drawn in the texture's proportions", "[render]") {
+  const Mesh m = two_chart_sphere();  // discs centred at u = 1/4 and 3/4
+  const int w = 256, h = 128;
+  // Aspect 2: the unit square is a 2:1 rectangle filling the picture but for the margin.
+  const Image img = render_uv_layout(m, w, h, 2.0);
+  const double margin = 0.03 * h, sy = h - 2 * margin, sx = 2 * sy, ox = 0.5 * (w - sx);
+  auto pixel_of = [&](double u, double v) {
+    return std::pair<int, int>{static_cast<int>(ox + u * sx), static_cast<int>(margin + (1 - v) * sy)};
+  };
+  // The discs are stretched sideways with the texture: their centres and points 0.2 to
+  // either side in u are covered, which a square drawing (u 0.2 is ~half the width
+  // of a disc there) would leave white at the ends.
+  for (const double cu : {0.25, 0.75})
+    for (const double du : {-0.15, 0.0, 0.15}) {
+      const auto [x, y] = pixel_of(cu + du, 0.5);
+      CHECK_FALSE(is_white(img, x, y));
+    }
+  // Outside the frame, left and right, white.
+  CHECK(is_white(img, static_cast<int>(ox) - 2, h / 2));
+  CHECK(is_white(img, static_cast<int>(ox + sx) + 2, h / 2));
+  CHECK_THROWS_AS(render_uv_layout(m, w, h, 0.0), InputError);
+}
+
 TEST_CASE("the UV layout is drawn the same for any thread count", "[render]") {
   // Bands of rows are drawn in parallel; a band shorter than the others at the bottom and
   // segments crossing band borders must blend exactly as in one pass.
