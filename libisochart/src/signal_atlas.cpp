@@ -106,7 +106,9 @@ void pack_weighted(const Mesh& mesh, Atlas& atlas, std::vector<detail::AtlasChar
     for (size_t v = 0; v < charts[i].uv_ids.size(); ++v) atlas.uvs[charts[i].uv_ids[v]] = pc[i].uv[v];
   }
   const Mesh m = atlas.apply_to(mesh);
-  const StretchStats st = measure_stretch(m);
+  Mesh texels = m;  // stretch on the texture, as in pack_atlas
+  for (Vec2d& uv : texels.uvs) uv = {uv.x * po.width, uv.y * po.height};
+  const StretchStats st = measure_stretch(texels);
   atlas.stats.l2 = st.l2;
   atlas.stats.linf = st.linf;
   atlas.stats.flipped = st.flipped;
