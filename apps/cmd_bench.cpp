@@ -339,7 +339,20 @@ class Bench {
       std::vector<std::pair<std::string, std::string>> externals;  // label, file
       if (meth.kind == Kind::ExternalAuto) {
         externals = auto_externals(a_.data, name);
-        if (externals.empty()) continue;  // no atlas from another tool for this mesh
+        if (externals.empty()) {
+          // No atlas from another tool for this mesh: silently skipped among other methods,
+          // but a run asking only for them says so rather than printing an empty table.
+          if (methods_.size() > 1) continue;
+          Row r;
+          r.mesh = name;
+          r.faces = mesh.num_faces();
+          r.closed = closed;
+          r.method = "external";
+          r.note = "n/a: no baseline atlas " + (fs::path(a_.data) / "baseline_atlases" / (name + "_*.obj")).string();
+          rows_.push_back(r);
+          line(r, ++k, n);
+          continue;
+        }
       } else if (meth.kind == Kind::ExternalFile) {
         externals.push_back({"external:" + stem(meth.file), meth.file});
       }
@@ -769,7 +782,10 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   int n = 0;
   for (const auto& m : a.meshes)
     for (const Method& meth : methods)
-      n += meth.kind == Kind::ExternalAuto ? static_cast<int>(auto_externals(a.data, stem(m)).size()) : 1;
+      n += meth.kind == Kind::ExternalAuto && methods.size() > 1
+               ? static_cast<int>(auto_externals(a.data, stem(m)).size())
+               : meth.kind == Kind::ExternalAuto ? std::max<int>(1, auto_externals(a.data, stem(m)).size())
+                                                 : 1;
   for (const auto& m : a.meshes) bench.run_mesh(m, k, n);
 
   const std::string md = to_markdown(bench.rows(), bench.sweep_points(), a);

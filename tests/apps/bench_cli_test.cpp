@@ -172,6 +172,20 @@ TEST_CASE("bench: an external atlas the sampler rejects is an n/a row, not an ab
   CHECK(rows[1].at("psnr_db").empty());
 }
 
+TEST_CASE("bench: only external methods and no baseline atlas for the mesh: an n/a row saying so", "[bench]") {
+  const fs::path dir = fresh_dir("no_baseline");
+  const fs::path out = dir / "out", err = dir / "stderr.txt";
+  fs::create_directories(dir / "data" / "baseline_atlases");
+  REQUIRE(run_cli("bench builtin:sphere --methods external --data '" + (dir / "data").string() +
+                      "' --sweep none --no-plots --out '" + out.string() + "'",
+                  err) == 0);
+  const auto rows = read_csv(out / "bench.csv");
+  REQUIRE(rows.size() == 1);
+  CHECK(rows[0].at("method") == "external");
+  CHECK(rows[0].at("note").rfind("n/a: no baseline atlas ", 0) == 0);
+  CHECK(rows[0].at("note").find("sphere_*.obj") != std::string::npos);
+}
+
 TEST_CASE("bench: bad inputs are one line and exit code 2", "[bench]") {
   const fs::path dir = fresh_dir("bad");
   const fs::path err = dir / "stderr.txt";
