@@ -91,4 +91,10 @@ void Context::emit(const nlohmann::json& result, const std::string& text) const 
 
 void bad_option(const std::string& message) { throw isochart::InputError("", message); }
 
+void check_levels(const std::vector<int>& levels) {
+  for (std::size_t i = 0; i < levels.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (levels[i] == levels[j]) bad_option("--levels: " + std::to_string(levels[i]) + " is given twice");
+}
+
 }  // namespace cli

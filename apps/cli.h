@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -85,6 +86,10 @@ void add_sae(CLI::App& app, Context& ctx, Action& action);
 
 /// Throws InputError(file, msg) for an invalid option value (exit code 2).
 [[noreturn]] void bad_option(const std::string& message);
+
+/// Refuses a pyramid resolution given twice in --levels (it would be built and written twice
+/// to the same file).
+void check_levels(const std::vector<int>& levels);
 
 /// Seconds since `t0`.
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {

@@ -81,6 +81,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   const int modes = (a.res > 0) + (a.samples > 0) + (a.width > 0 || a.height > 0) + !a.levels.empty();
   if (modes > 1) bad_option("--res, --samples, --width/--height and --levels are exclusive");
   if ((a.width > 0) != (a.height > 0)) bad_option("--width and --height go together");
+  check_levels(a.levels);
   if (!a.signal.empty() && !a.atlas.empty()) bad_option("--signal builds the atlas; it does not go with --atlas");
   if (a.signal_use != "param" && a.signal_use != "full") bad_option("--signal-use must be param or full");
   isochart::format_from_path(a.output);  // reject an unknown output extension before working

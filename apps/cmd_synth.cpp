@@ -71,6 +71,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   if (a.coarse_neighborhood % 2 == 0)
     bad_option("--coarse-neighborhood must be odd (1, 3, 5, ...), not " + std::to_string(a.coarse_neighborhood));
   if (a.scale > 0 && a.pixels_per_texel > 0) bad_option("--scale and --pixels-per-texel are exclusive");
+  check_levels(a.levels);
   const isochart::Image exemplar = synth::exemplar_from(a.exemplar);
 
   const std::string prefix = "builtin:";
