@@ -1,6 +1,8 @@
 // `isocharts render MESH -o view.png`: shaded, chart-coloured or textured views of a mesh, or
 // its UV layout.
 
+#include <algorithm>
+#include <cmath>
 #include <sstream>
 
 #include "cli.h"
@@ -26,6 +28,7 @@ struct RenderArgs {
   int width = 0;   // 0: 400 per view (1024 for --uv-layout)
   int height = 0;  // 0: 400 (1024 for --uv-layout)
   int supersample = 2;
+  double aspect = 0;  // --uv-layout: texture width / height (0: square)
   std::string up = "y";  // the model's up axis: x, y, z, -x, -y or -z
 };
 
@@ -46,8 +49,13 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   if (a.uv_layout && (!a.texture.empty() || a.wireframe || a.ortho || a.transparent))
     bad_option(
         "--uv-layout draws the atlas itself; it takes no --texture, --wireframe, --ortho or --transparent");
-  const int width = a.width > 0 ? a.width : (a.uv_layout ? 1024 : 400 * a.views);
-  const int height = a.height > 0 ? a.height : (a.uv_layout ? 1024 : 400);
+  if (a.aspect > 0 && !a.uv_layout) bad_option("--aspect goes with --uv-layout");
+  const double aspect = a.aspect > 0 ? a.aspect : 1.0;
+  // A layout picture defaults to the texture's proportions, its longer side 1024.
+  const int layout_w = aspect >= 1 ? 1024 : std::max(16, static_cast<int>(std::lround(1024 * aspect)));
+  const int layout_h = aspect >= 1 ? std::max(16, static_cast<int>(std::lround(1024 / aspect))) : 1024;
+  const int width = a.width > 0 ? a.width : (a.uv_layout ? layout_w : 400 * a.views);
+  const int height = a.height > 0 ? a.height : (a.uv_layout ? layout_h : 400);
   if (static_cast<long long>(width) * height * a.supersample * a.supersample > (1LL << 25))
     bad_option("image " + std::to_string(width) + "x" + std::to_string(height) + " with supersample " +
                std::to_string(a.supersample) + " is too large to render");
@@ -73,7 +81,7 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   isochart::Image image;
   std::string mode;
   if (a.uv_layout) {
-    image = for_input([&] { return isochart::render_uv_layout(mesh, width, height); });
+    image = for_input([&] { return isochart::render_uv_layout(mesh, width, height, aspect); });
     mode = "uv-layout";
   } else {
     isochart::RenderOptions o;
@@ -128,6 +136,10 @@ void add_render(CLI::App& app, Context& ctx, Action& action) {
   sub->add_flag("--charts", args->charts, "Colour each chart (face groups, else UV charts)");
   sub->add_flag("--wireframe", args->wireframe, "Draw the triangle edges");
   sub->add_flag("--uv-layout", args->uv_layout, "Draw the atlas in texture space instead of 3D views");
+  sub->add_option("--aspect", args->aspect,
+                  "With --uv-layout: width / height of the texture the UVs address, so the layout is drawn "
+                  "as the texture looks (default 1)")
+      ->check(positive);
   sub->add_option("--views", args->views,
                   "Number of views side by side: front, right, back, left, top, bottom, "
                   "front-right, back-left")

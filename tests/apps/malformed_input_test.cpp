@@ -307,6 +307,8 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --scale: expected a positive number, got '0'\n"));
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --levels 64,32,64", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --levels: 64 is given twice\n"));
+  CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --aspect 2", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect goes with --uv-layout\n"));
   // An even neighbourhood is refused before any work.
   CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --neighborhood 4", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --neighborhood must be odd (3, 5, 7, ...), not 4\n"));
