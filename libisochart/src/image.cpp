@@ -126,6 +126,7 @@ Image read_image(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "image file not found");
   if (fs::is_directory(path, ec)) throw InputError(path, "is a directory, not an image file");
+  note_input_file(path);
 
   const IsochartsImageModule& m = image_module();
   Image image;

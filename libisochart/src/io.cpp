@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <mutex>
+#include <set>
 
 #include "io_internal.h"
 #include "isochart/builtin.h"
@@ -110,6 +111,7 @@ void append_number(std::string& out, long long v) {
 std::string read_file(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw InputError(path, std::string("cannot open file: ") + std::strerror(errno));
+  note_input_file(path);
   struct stat st {};
   if (::fstat(fd, &st) != 0) {
     const int err = errno;
@@ -252,6 +254,20 @@ std::string follow_links(const std::string& path) {
 }
 }  // namespace
 
+namespace {
+std::mutex batch_mutex;
+OutputBatch* batch = nullptr;
+// The files read while the batch is open (device, inode): an output must not replace one.
+std::set<std::pair<dev_t, ino_t>> batch_inputs;
+}  // namespace
+
+void note_input_file(const std::string& path) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+  std::lock_guard<std::mutex> lock(batch_mutex);
+  if (batch) batch_inputs.insert({st.st_dev, st.st_ino});
+}
+
 std::string output_target(const std::string& path) {
   // An output path that is a symbolic link is written through: the rename replaces the file the
   // link points at, and the link stays (renaming over the link itself would replace it).
@@ -260,6 +276,13 @@ std::string output_target(const std::string& path) {
   struct stat st;
   if (::stat(p.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
     throw InputError(path, S_ISDIR(st.st_mode) ? "cannot write: is a directory" : "cannot write: not a regular file");
+  if (::stat(p.c_str(), &st) == 0) {
+    // Replacing a file this run read would destroy the input (`atlas a.obj -o a.obj`, a
+    // report over its mesh); refused before anything is written.
+    std::lock_guard<std::mutex> lock(batch_mutex);
+    if (batch_inputs.count({st.st_dev, st.st_ino}))
+      throw InputError(path, "cannot write: it is an input of this run and would be overwritten");
+  }
   return p;
 }
 
@@ -290,11 +313,6 @@ void write_file_atomic(const std::string& path, const std::string& data) {
   }
 }
 
-namespace {
-std::mutex batch_mutex;
-OutputBatch* batch = nullptr;
-}  // namespace
-
 OutputBatch::OutputBatch() {
   std::lock_guard<std::mutex> lock(batch_mutex);
   if (batch) throw Error("OutputBatch: a batch is already open");
@@ -305,17 +323,18 @@ OutputBatch::~OutputBatch() {
   std::lock_guard<std::mutex> lock(batch_mutex);
   for (const auto& [tmp, target] : staged_) std::remove(tmp.c_str());
   batch = nullptr;
+  batch_inputs.clear();
 }
 
 bool OutputBatch::stage(const std::string& tmp, const std::string& target) {
   std::lock_guard<std::mutex> lock(batch_mutex);
   if (!batch) return false;
-  // Written twice in one run: the later file wins.
+  // Two outputs of one run on one path (`-o a.obj -o a.obj`, --texture-out and --imt-out
+  // alike): the first would be lost, so the run is refused.
   for (auto& [t, g] : batch->staged_)
     if (g == target) {
-      std::remove(t.c_str());
-      t = tmp;
-      return true;
+      std::remove(tmp.c_str());
+      throw InputError(target, "cannot write: given as two outputs of this run");
     }
   batch->staged_.emplace_back(tmp, target);
   return true;

@@ -287,6 +287,30 @@ TEST_CASE("a run that fails at its last output leaves none of its outputs", "[cl
   CHECK(fs::is_empty(tmp.path / "r.json"));
 }
 
+TEST_CASE("an output over an input of the run, or two outputs on one path, are refused", "[cli]") {
+  TempDir tmp("overwrite");
+  const fs::path err = tmp.path / "err.txt", mesh = tmp.path / "s.obj";
+  REQUIRE(run_cli("-q atlas builtin:sphere -o '" + mesh.string() + "'", err) == 0);
+  const std::string before = read_bytes(mesh);
+  for (const std::string& args :
+       {"atlas '" + mesh.string() + "' -o '" + mesh.string() + "'",
+        "--report '" + mesh.string() + "' info '" + mesh.string() + "'",
+        "render '" + mesh.string() + "' --uv-layout -o '" + (tmp.path / "l.png").string() + "' --report '" +
+            mesh.string() + "'"}) {
+    CAPTURE(args);
+    CHECK(run_cli("-q " + args, err) == 2);
+    CHECK_THAT(read_bytes(err), Catch::Equals("isocharts: error: " + mesh.string() +
+                                              ": cannot write: it is an input of this run and would be "
+                                              "overwritten\n"));
+    CHECK(read_bytes(mesh) == before);
+  }
+  const fs::path twice = tmp.path / "t.obj";
+  CHECK(run_cli("-q atlas builtin:sphere -o '" + twice.string() + "' -o '" + twice.string() + "'", err) == 2);
+  CHECK_THAT(read_bytes(err),
+             Catch::Equals("isocharts: error: " + twice.string() + ": cannot write: given as two outputs of this run\n"));
+  CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt", "s.obj"});
+}
+
 TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]") {
   TempDir tmp("badopts");
   const fs::path err = tmp.path / "err.txt";

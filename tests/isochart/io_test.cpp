@@ -647,12 +647,31 @@ TEST_CASE("an output batch lands all its files together or none", "[io]") {
   {
     OutputBatch batch;
     save_mesh(m, d.file("a.ply"));
-    write_file_atomic(d.file("b.txt"), "first");
-    write_file_atomic(d.file("b.txt"), "second");  // the later write wins
+    write_file_atomic(d.file("b.txt"), "second");
+    // Two outputs on one path: the first would be lost, so the second is refused.
+    CHECK_THROWS_WITH(write_file_atomic(d.file("b.txt"), "again"), Catch::Contains("given as two outputs"));
     // Nothing is in place before the commit; a reader in the same run finds the staged file.
     CHECK_FALSE(fs::exists(d.file("a.ply")));
     CHECK(OutputBatch::open());
     CHECK(read_bytes(OutputBatch::current_path(d.file("b.txt"))) == "second");
+    batch.commit();
+  }
+  {
+    // A file the run read is never an output of it, whatever name or link leads to it.
+    fs::create_symlink("a.ply", d.file("link.ply"));
+    OutputBatch batch;
+    load_mesh(d.file("a.ply"));
+    CHECK_THROWS_WITH(save_mesh(m, d.file("a.ply")), Catch::Contains("is an input of this run"));
+    CHECK_THROWS_WITH(write_file_atomic(d.file("link.ply"), "x"), Catch::Contains("is an input of this run"));
+    batch.commit();
+    fs::remove(d.file("link.ply"));
+  }
+  CHECK(load_mesh(d.file("a.ply")).mesh.num_faces() == m.num_faces());
+  {
+    // Outside a batch (library use) reads are not remembered.
+    load_mesh(d.file("a.ply"));
+    OutputBatch batch;
+    save_mesh(m, d.file("a.ply"));
     batch.commit();
   }
   CHECK_FALSE(OutputBatch::open());

@@ -83,10 +83,15 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
 /// \throw InputError(path, "cannot write: REASON").
 void write_file_atomic(const std::string& path, const std::string& data);
 
+/// Records that the run read `path`: while an OutputBatch is open, an output over that file
+/// (the same file, through any name or link) is refused. The readers call it.
+void note_input_file(const std::string& path);
+
 /// Where an output written to `path` lands: `path`, or the file its symbolic links lead to
 /// (outputs are written through links, which stay links).
 /// \throw InputError(path, "cannot write: ...") when that is a directory, a device or another
-///        file that is not a regular one (an atomic rename would replace it).
+///        file that is not a regular one (an atomic rename would replace it), or, while an
+///        OutputBatch is open, a file this run read (note_input_file).
 std::string output_target(const std::string& path);
 
 /// All of a run's outputs, or none. While a batch is open, write_file_atomic, save_mesh and
