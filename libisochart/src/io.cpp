@@ -55,13 +55,28 @@ void check_face_limit(const std::string& path, long long faces, const LoadOption
 bool LineScanner::next(std::string_view& line) {
   if (pos_ >= data_.size()) return false;
   const char* begin = data_.data() + pos_;
-  const std::size_t left = data_.size() - pos_;
-  const void* nl = std::memchr(begin, '\n', left);
-  const std::size_t len = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - begin) : left;
-  pos_ += nl ? len + 1 : len;
+  // The next LF is remembered, so that a file of lone CRs is not searched to its end per line.
+  if (!lf_known_ || next_lf_ < pos_) {
+    const void* nl = std::memchr(begin, '\n', data_.size() - pos_);
+    next_lf_ = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - data_.data()) : data_.size();
+    lf_known_ = true;
+  }
+  std::size_t len = next_lf_ - pos_;
+  std::size_t skip = next_lf_ < data_.size() ? 1 : 0;
+  const void* cr = std::memchr(begin, '\r', len);
+  if (cr) {
+    const std::size_t at = static_cast<std::size_t>(static_cast<const char*>(cr) - begin);
+    if (at + 1 == len && skip) {
+      len = at;  // CR LF
+      skip = 2;
+    } else {
+      len = at;  // a lone CR ends the line
+      skip = 1;
+    }
+  }
+  pos_ += len + skip;
   ++line_;
   line = std::string_view(begin, len);
-  if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
   if (std::memchr(line.data(), '\0', line.size()))
     fail_at_line(path_, line_, "unexpected binary data (NUL byte); this is not a text mesh file");
   return true;

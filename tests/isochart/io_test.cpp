@@ -180,6 +180,20 @@ TEST_CASE("OBJ: colours, normals, UVs and groups", "[io]") {
   CHECK_THAT(raw.warnings[1], Catch::Contains("'vendorthing' on line 20"));
 }
 
+TEST_CASE("text formats: a byte-order mark and lone CR line ends are read like plain LF", "[io]") {
+  TempDir d;
+  // Lone CRs (old Mac files), CR LF and LF mixed; the line numbers count each kind once.
+  const RawMesh obj = read_raw_mesh(d.write("m.obj", "\xEF\xBB\xBFv 0 0 0\rv 1 0 0\r\nv 0 1 0\nf 1 2 3\r"));
+  CHECK(obj.positions.size() == 3);
+  CHECK(obj.positions[1] == Vec3d{1, 0, 0});
+  REQUIRE(obj.polygons.size() == 1);
+  CHECK(obj.polygons[0] == std::vector<int>{0, 1, 2});
+  CHECK_THAT(load_error(d.write("bad.obj", "v 0 0 0\rv 1 0 0\r\nv 0 x 0\n")), Catch::Contains("line 3"));
+  const RawMesh off = read_raw_mesh(d.write("m.off", "\xEF\xBB\xBFOFF\r3 1 0\r0 0 0\r1 0 0\r0 1 0\r3 0 1 2\r"));
+  CHECK(off.positions.size() == 3);
+  CHECK(off.polygons.size() == 1);
+}
+
 TEST_CASE("OBJ: faces without texture coordinates next to faces with them get (0, 0)", "[io]") {
   TempDir d;
   const RawMesh raw = read_raw_mesh(
