@@ -302,6 +302,8 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
   for (std::size_t t = 0; t < raw.uvs.size(); ++t)
     if (!is_finite(raw.uvs[t]))
       fail("texture coordinate " + std::to_string(t) + " is not finite " + text(raw.uvs[t]));
+    else if (std::max(std::abs(raw.uvs[t].x), std::abs(raw.uvs[t].y)) > kMaxCoordinate)
+      fail("texture coordinate " + std::to_string(t) + " is beyond ±1e30 " + text(raw.uvs[t]));
   for (int f = 0; f < np; ++f) {
     const auto& poly = raw.polygons[f];
     if (poly.size() < 3)

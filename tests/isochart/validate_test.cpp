@@ -132,6 +132,10 @@ TEST_CASE("unrecoverable input is an InputError naming the element", "[validate]
   uv.uvs = {{0, 0}, {1, 0}};
   uv.polygon_uvs.assign(4, {0, 1, 2});
   CHECK_THAT(error_of(uv, true), Catch::Contains("texture coordinate 2"));
+  RawMesh far_uv = tetrahedron();  // stretch of such UVs overflowed to NaN in `stats`
+  far_uv.uvs = {{0, 0}, {1e300, 0}, {0, 1}};
+  far_uv.polygon_uvs.assign(4, {0, 1, 2});
+  CHECK_THAT(error_of(far_uv, true), Catch::Contains("texture coordinate 1 is beyond"));
   RawMesh all_degenerate = raw_of({{0, 0, 0}, {1, 1, 1}, {2, 2, 2}}, {{0, 1, 2}, {0, 1, 1}});
   CHECK_THAT(error_of(all_degenerate, true), Catch::Contains("no faces left"));
 }
