@@ -80,8 +80,10 @@ void add_psnr(CLI::App& app, Context& ctx, Action& action) {
       "psnr", "Geometric PSNR, RMS and Hausdorff distances between two meshes (A is the reference)");
   sub->add_option("a", args->a, "Reference mesh (its bounding-box diagonal is the PSNR peak)")->required();
   sub->add_option("b", args->b, "Compared mesh, e.g. a remesh")->required();
-  sub->add_option("--samples", args->samples, "Points sampled on each surface, by area (default 1000000)")
-      ->check(CLI::Range(1LL, 1'000'000'000LL));
+  // About 63 bytes per sample: 20 M is 1.3 GB.
+  sub->add_option("--samples", args->samples,
+                  "Points sampled on each surface, by area (default 1000000, at most 20000000)")
+      ->check(CLI::Range(1LL, 20'000'000LL));
   sub->footer(
       "PSNR = 20 log10(diagonal / d), d the larger of the two one-sided RMS distances (the mean "
       "of the two gives the second figure); distances are exact point-to-triangle.\n"

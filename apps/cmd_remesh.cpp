@@ -261,14 +261,16 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("-o,--output", args->output, "Remesh of the finest level (.ply, .obj or .glb); "
                                                 "coarser levels get _RES before the extension")
       ->required();
-  sub->add_option("--res", args->res, "Square image resolution (default 256)")->check(CLI::Range(2, 8192));
+  // About 600 bytes per sample (2048²: 2.4 GB), so 4096 a side (~10 GB) is the limit.
+  sub->add_option("--res", args->res, "Square image resolution (default 256; at most 4096, ~600 bytes a sample)")
+      ->check(CLI::Range(2, 4096));
   sub->add_option("--samples", args->samples, "Choose the square resolution giving about N defined samples")
-      ->check(CLI::Range(16LL, 268'435'456LL));
-  sub->add_option("--width", args->width, "Image width (with --height)")->check(CLI::Range(2, 8192));
-  sub->add_option("--height", args->height, "Image height (with --width)")->check(CLI::Range(2, 8192));
+      ->check(CLI::Range(16LL, 16'777'216LL));
+  sub->add_option("--width", args->width, "Image width (with --height)")->check(CLI::Range(2, 4096));
+  sub->add_option("--height", args->height, "Image height (with --width)")->check(CLI::Range(2, 4096));
   sub->add_option("--levels", args->levels, "Pyramid of square resolutions, e.g. 256,128,64,32")
       ->delimiter(',')
-      ->check(CLI::Range(2, 8192));
+      ->check(CLI::Range(2, 4096));
   sub->add_option("--atlas", args->atlas, "Use this atlas (a mesh with texture coordinates) instead of "
                                           "building the iso-chart atlas of the input");
   sub->add_option("--exr", args->exr, "Write each level as PREFIX_WxH.exr (float positions, normals, "
@@ -283,7 +285,7 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(0, 20))
       ->capture_default_str();
   sub->add_option("--psnr-samples", args->psnr_samples, "Points per surface for the PSNR (default 1000000)")
-      ->check(CLI::Range(1LL, 1'000'000'000LL));
+      ->check(CLI::Range(1LL, 20'000'000LL));
   sub->add_flag("--no-psnr", args->no_psnr, "Skip the distance measurement");
   sub->add_option("--signal", args->signal,
                   "Build a signal-specialized atlas for this signal (normals: samples follow the "

@@ -92,10 +92,11 @@ void add_sae(CLI::App& app, Context& ctx, Action& action) {
       "--source", args->source,
       "Mesh carrying the signal (same vertices and faces), e.g. the original with its colours or UVs");
   sub->add_option("--res", args->res, "Texture size in texels (square)")
-      ->check(CLI::Range(1, 16384))
+      ->check(CLI::Range(1, 8192))
       ->capture_default_str();
-  sub->add_option("--width", args->width, "Texture width (overrides --res)")->check(CLI::Range(1, 16384));
-  sub->add_option("--height", args->height, "Texture height (overrides --res)")->check(CLI::Range(1, 16384));
+  // 8192² takes 1.5 GB, 16384² 6 GB.
+  sub->add_option("--width", args->width, "Texture width (overrides --res)")->check(CLI::Range(1, 8192));
+  sub->add_option("--height", args->height, "Texture height (overrides --res)")->check(CLI::Range(1, 8192));
   sub->add_option("--texture-out", args->texture_out, "Write the baked signal texture (normals as 0.5n+0.5)");
   sub->add_option("--imt-out", args->imt_out, "Write the per-face IMT (g00 g01 g11 per line)");
   sub->footer("Example: isocharts sae bunny_atlas.obj --signal normals --res 256 --json");
