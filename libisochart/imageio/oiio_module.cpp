@@ -100,10 +100,14 @@ int read_file(const char* path, long long max_values, int* width, int* height, i
   if (spec.depth > 1)
     return report(kIsochartsImageInputError, "volume images are not supported", message, message_size);
   const long long values = static_cast<long long>(spec.width) * spec.height * spec.nchannels;
-  if (values > max_values)
+  // Counted as four channels whatever the file holds: a grey image is expanded to RGB(A)
+  // floats after reading (a 30000² grey PNG of 875 KB took 7 GB).
+  const long long area = static_cast<long long>(spec.width) * spec.height;
+  if (area * std::max(spec.nchannels, 4) > max_values)
     return report(kIsochartsImageInputError,
-                  "image too large (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) + "x" +
-                      std::to_string(spec.nchannels) + ")",
+                  "image too large (" + std::to_string(spec.width) + "x" + std::to_string(spec.height) +
+                      " pixels; at most " + std::to_string(max_values / 4) + " pixels, e.g. " +
+                      std::to_string(static_cast<long long>(std::sqrt(static_cast<double>(max_values / 4)))) + "²)",
                   message, message_size);
   auto* data = static_cast<float*>(std::malloc(static_cast<std::size_t>(values) * sizeof(float)));
   if (!data) return report(kIsochartsImageError, "out of memory reading the image", message, message_size);

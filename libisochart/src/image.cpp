@@ -24,8 +24,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Images beyond this many values are refused up front rather than exhausting memory.
-constexpr long long kMaxImageValues = 1LL << 30;
+// Images beyond this many values (pixels × 4) are refused up front rather than exhausting
+// memory: 8192² pixels, read as 1 GB of floats.
+constexpr long long kMaxImageValues = 1LL << 28;
 
 std::string lower_extension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();

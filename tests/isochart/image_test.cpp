@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -46,7 +47,37 @@ Image gradient_image(int w, int h, int c) {
   return img;
 }
 
+// The bytes of a PNG that declares w × h grey pixels and holds none (only its header is
+// read before the size check).
+std::string png_header_only(std::uint32_t w, std::uint32_t h) {
+  auto crc32 = [](const std::string& bytes) {
+    std::uint32_t c = 0xffffffffu;
+    for (unsigned char b : bytes) {
+      c ^= b;
+      for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
+    }
+    return c ^ 0xffffffffu;
+  };
+  auto be32 = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8),
+                       static_cast<char>(v)};
+  };
+  auto chunk = [&](const std::string& type, const std::string& data) {
+    return be32(static_cast<std::uint32_t>(data.size())) + type + data + be32(crc32(type + data));
+  };
+  const std::string ihdr = be32(w) + be32(h) + std::string("\x08\x00\x00\x00\x00", 5);
+  return std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) + chunk("IDAT", "") + chunk("IEND", "");
+}
+
 }  // namespace
+
+TEST_CASE("an image whose pixels would not fit in memory is refused from its header", "[image]") {
+  TempDir dir;
+  // 9000² grey is 81 M pixels, read as four floats each: over the limit of 8192².
+  const std::string path = dir.file("huge_grey.png");
+  std::ofstream(path, std::ios::binary) << png_header_only(9000, 9000);
+  CHECK_THROWS_WITH(read_image(path), Catch::Contains("image too large (9000x9000 pixels"));
+}
 
 TEST_CASE("PNG round trip keeps size, channels and 8-bit values", "[image]") {
   TempDir dir;
