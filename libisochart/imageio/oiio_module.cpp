@@ -4,6 +4,9 @@
 // OIIO keeps per-thread and global error strings; every failure path reads them (which also
 // clears them, so OIIO does not complain at exit).
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
@@ -208,10 +211,38 @@ int write_file(const char* path, int width, int height, int channels, int stride
   return kIsochartsImageOk;
 }
 
+// libpng's default error handler, which OIIO's PNG reader keeps, prints "libpng error: ..."
+// on stderr before OIIO reports the same problem to us; the user gets our one line only. The
+// reader's own stderr output is sent to /dev/null while it runs (a progress line printed by
+// another thread meanwhile is lost, nothing else writes to stderr during a read).
+class QuietStderr {
+ public:
+  QuietStderr() {
+    std::fflush(stderr);
+    saved_ = ::dup(STDERR_FILENO);
+    const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved_ >= 0 && null >= 0) ::dup2(null, STDERR_FILENO);
+    if (null >= 0) ::close(null);
+  }
+  ~QuietStderr() {
+    std::fflush(stderr);
+    if (saved_ >= 0) {
+      ::dup2(saved_, STDERR_FILENO);
+      ::close(saved_);
+    }
+  }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+
+ private:
+  int saved_ = -1;
+};
+
 // Nothing may escape across the C boundary.
 int safe_read(const char* path, long long max_values, int* width, int* height, int* channels, float** pixels,
               char* names, std::size_t names_size, char* message, std::size_t message_size) {
   try {
+    const QuietStderr quiet;
     return read_file(path, max_values, width, height, channels, pixels, names, names_size, message,
                      message_size);
   } catch (const std::bad_alloc&) {

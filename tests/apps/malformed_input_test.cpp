@@ -311,6 +311,22 @@ TEST_CASE("an output over an input of the run, or two outputs on one path, are r
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt", "s.obj"});
 }
 
+TEST_CASE("a corrupt texture is one line: the image library's own message is not printed", "[cli]") {
+  TempDir tmp("corrupt_png");
+  const fs::path err = tmp.path / "err.txt", mesh = tmp.path / "s.obj", png = tmp.path / "t.png";
+  REQUIRE(run_cli("-q atlas builtin:sphere -o '" + mesh.string() + "'", err) == 0);
+  REQUIRE(run_cli("-q render builtin:creature -o '" + png.string() + "' --views 1", err) == 0);
+  std::string bytes = read_bytes(png);
+  for (std::size_t i = bytes.size() / 2; i < bytes.size() / 2 + 200; ++i) bytes[i] = 0x55;  // inside IDAT
+  write_bytes(png, bytes);
+  CHECK(run_cli("render '" + mesh.string() + "' --texture '" + png.string() + "' -o '" +
+                    (tmp.path / "v.png").string() + "'",
+                err) == 2);
+  const std::string text = read_bytes(err);
+  CHECK(std::count(text.begin(), text.end(), '\n') == 1);  // libpng used to print "libpng error: ..." first
+  CHECK_THAT(text, Catch::StartsWith("isocharts: error: " + png.string() + ": cannot read image"));
+}
+
 TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]") {
   TempDir tmp("badopts");
   const fs::path err = tmp.path / "err.txt";
