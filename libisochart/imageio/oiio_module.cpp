@@ -55,16 +55,18 @@ int report(int status, const std::string& text, char* message, std::size_t size)
 // padding, PNG trailers), so it is looked for in the last 64 KiB rather than at the very end.
 // 1 complete, 0 cut short, -1 another format.
 int trailer_complete(const char* path) {
-  const char* dot = std::strrchr(path, '.');
-  if (!dot) return -1;
-  std::string ext(dot + 1);
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  std::string marker;
-  if (ext == "png") marker = std::string("IEND\xAE\x42\x60\x82", 8);
-  else if (ext == "jpg" || ext == "jpeg") marker = std::string("\xFF\xD9", 2);
-  else return -1;
+  // The format is told by the first bytes, not the name: a PNG named .jpg is still read whole.
   std::FILE* f = std::fopen(path, "rb");
   if (!f) return 0;
+  unsigned char head[8] = {0};
+  const std::size_t got = std::fread(head, 1, sizeof head, f);
+  std::string marker;
+  if (got == 8 && std::memcmp(head, "\x89PNG\r\n\x1a\n", 8) == 0) marker = std::string("IEND\xAE\x42\x60\x82", 8);
+  else if (got >= 3 && head[0] == 0xFF && head[1] == 0xD8 && head[2] == 0xFF) marker = std::string("\xFF\xD9", 2);
+  if (marker.empty()) {
+    std::fclose(f);
+    return -1;
+  }
   std::string tail;
   if (std::fseek(f, 0, SEEK_END) == 0) {
     const long size = std::ftell(f);
@@ -81,6 +83,12 @@ int trailer_complete(const char* path) {
 int read_file(const char* path, long long max_values, int* width, int* height, int* channels, float** pixels,
               char* names, std::size_t names_size, char* message, std::size_t message_size) {
   *pixels = nullptr;
+  {
+    std::FILE* f = std::fopen(path, "rb");
+    const bool empty = f && std::fgetc(f) == EOF;
+    if (f) std::fclose(f);
+    if (empty) return report(kIsochartsImageInputError, "cannot read image: the file is empty", message, message_size);
+  }
   if (trailer_complete(path) == 0)
     return report(kIsochartsImageInputError, "cannot read image: the file is cut short (no end marker)", message,
                   message_size);

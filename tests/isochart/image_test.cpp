@@ -79,6 +79,22 @@ TEST_CASE("an image whose pixels would not fit in memory is refused from its hea
   CHECK_THROWS_WITH(read_image(path), Catch::Contains("image too large (9000x9000 pixels"));
 }
 
+TEST_CASE("images are told by their first bytes: an empty file says so, a PNG named .jpg reads", "[image]") {
+  TempDir dir;
+  const std::string empty = dir.file("empty.png");
+  std::ofstream(empty).close();
+  CHECK_THROWS_WITH(read_image(empty), Catch::Contains("the file is empty"));
+  const Image img = gradient_image(7, 5, 3);
+  write_image(dir.file("real.png"), img);
+  fs::copy_file(dir.file("real.png"), dir.file("named.jpg"));
+  const Image back = read_image(dir.file("named.jpg"));
+  CHECK(back.width == 7);
+  CHECK(back.pixels == read_image(dir.file("real.png")).pixels);
+  // Cut short, it is still known for a PNG by its first bytes.
+  fs::resize_file(dir.file("named.jpg"), fs::file_size(dir.file("named.jpg")) - 12);
+  CHECK_THROWS_WITH(read_image(dir.file("named.jpg")), Catch::Contains("cut short"));
+}
+
 TEST_CASE("PNG round trip keeps size, channels and 8-bit values", "[image]") {
   TempDir dir;
   for (int channels : {1, 3, 4}) {
