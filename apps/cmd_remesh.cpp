@@ -240,6 +240,17 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
       << (s.topology.euler_characteristic == s.input_euler_characteristic ? "" : " (input " + std::to_string(s.input_euler_characteristic) + ")");
     if (!a.no_psnr) t << ", PSNR " << std::fixed << std::setprecision(2) << d.psnr << " dB" << std::defaultfloat;
     t << " -> " << out << "\n";
+    // Too few samples for the charts' cut paths (a coarse level of a many-chart atlas): the
+    // remesh is written, but a pipeline reading only the exit code should hear about it.
+    const bool same_topology = s.topology.euler_characteristic == s.input_euler_characteristic &&
+                               s.topology.boundary_loops == s.input_boundary_loops && s.topology.edge_manifold();
+    if (!same_topology)
+      ctx.warn(out, std::to_string(s.width) + "x" + std::to_string(s.height) +
+                        " level does not keep the input's topology (euler " +
+                        std::to_string(s.topology.euler_characteristic) + ", input " +
+                        std::to_string(s.input_euler_characteristic) + "; boundary loops " +
+                        std::to_string(s.topology.boundary_loops) + ", input " +
+                        std::to_string(s.input_boundary_loops) + "): too few samples for its charts");
   }
   nlohmann::json j;
   j["input"] = a.input;
