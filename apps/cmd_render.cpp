@@ -57,8 +57,9 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   const int width = a.width > 0 ? a.width : (a.uv_layout ? layout_w : 400 * a.views);
   const int height = a.height > 0 ? a.height : (a.uv_layout ? layout_h : 400);
   if (static_cast<long long>(width) * height * a.supersample * a.supersample > (1LL << 25))
-    bad_option("image " + std::to_string(width) + "x" + std::to_string(height) + " with supersample " +
-               std::to_string(a.supersample) + " is too large to render");
+    bad_option("--width/--height/--supersample: " + std::to_string(width) + "x" + std::to_string(height) +
+               " pixels at supersample " + std::to_string(a.supersample) +
+               " is too large to render (width x height x supersample² at most 33554432, e.g. 4096x2048 at 2)");
   if (!a.uv_layout && width < a.views)
     bad_option("--width " + std::to_string(width) + " is too small for " + std::to_string(a.views) +
                " views");

@@ -347,6 +347,9 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --scale: expected a positive number, got '0'\n"));
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --levels 64,32,64", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --levels: 64 is given twice\n"));
+  CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --width 4096 --height 4096", err) ==
+        2);
+  CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --width/--height/--supersample: 4096x4096 pixels"));
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --aspect 2", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect goes with --uv-layout\n"));
   // An even neighbourhood is refused before any work.
