@@ -449,10 +449,27 @@ void weld_equal_positions(RawMesh& raw) {
   if (!raw.colors.empty()) raw.colors = std::move(colors);
 }
 
+namespace {
+// External buffers are read like every input (a directory named as a buffer made tinygltf's own
+// reader throw bad_alloc), and count as inputs of the run.
+bool read_buffer_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
+  try {
+    const std::string bytes = read_file(path);
+    out->assign(bytes.begin(), bytes.end());
+    return true;
+  } catch (const InputError& e) {
+    if (err) *err += std::string(e.what()) + "\n";
+    return false;
+  }
+}
+}  // namespace
+
 RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, const LoadOptions& options) {
   if (data.size() > 0xffffffffu) throw InputError(path, "glTF file is larger than 4 GiB");
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(skip_image, nullptr);
+  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_buffer_file,
+                         &tinygltf::WriteWholeFile, nullptr});
   tinygltf::Model model;
   std::string err, warn;
   const auto slash = path.find_last_of('/');

@@ -531,6 +531,8 @@ TEST_CASE("glTF: primitives, modes, index types and transforms", "[io]") {
   CHECK(c.polygons == a.polygons);
   fs::remove(d.file("s.bin"));
   CHECK_THAT(load_error(d.file("external.gltf")), Catch::StartsWith("invalid glTF"));
+  fs::create_directory(d.file("s.bin"));  // tinygltf's own reader threw bad_alloc on this
+  CHECK_THAT(load_error(d.file("external.gltf")), Catch::StartsWith("invalid glTF") && Catch::Contains("is a directory"));
 }
 
 TEST_CASE("glTF: malformed files are clear errors", "[io]") {
