@@ -54,19 +54,32 @@ int report(int status, const std::string& text, char* message, std::size_t size)
 // its own complaint on stderr before ours. Some writers append bytes after the marker (JPEG
 // padding, PNG trailers), so it is looked for in the last 64 KiB rather than at the very end.
 // 1 complete, 0 cut short, -1 another format.
-int trailer_complete(const char* path) {
-  // The format is told by the first bytes, not the name: a PNG named .jpg is still read whole.
+// The end marker of `path`'s format: told by its first bytes for a file to read (a PNG named
+// .jpg is still a PNG), by the extension for one about to be written. Empty: none checked.
+std::string end_marker(const char* path, bool by_content) {
+  const std::string png("IEND\xAE\x42\x60\x82", 8), jpeg("\xFF\xD9", 2);
+  if (!by_content) {
+    const char* dot = std::strrchr(path, '.');
+    if (!dot) return {};
+    std::string ext(dot + 1);
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext == "png" ? png : ext == "jpg" || ext == "jpeg" ? jpeg : std::string();
+  }
   std::FILE* f = std::fopen(path, "rb");
-  if (!f) return 0;
+  if (!f) return {};
   unsigned char head[8] = {0};
   const std::size_t got = std::fread(head, 1, sizeof head, f);
-  std::string marker;
-  if (got == 8 && std::memcmp(head, "\x89PNG\r\n\x1a\n", 8) == 0) marker = std::string("IEND\xAE\x42\x60\x82", 8);
-  else if (got >= 3 && head[0] == 0xFF && head[1] == 0xD8 && head[2] == 0xFF) marker = std::string("\xFF\xD9", 2);
-  if (marker.empty()) {
-    std::fclose(f);
-    return -1;
-  }
+  std::fclose(f);
+  if (got == 8 && std::memcmp(head, "\x89PNG\r\n\x1a\n", 8) == 0) return png;
+  if (got >= 3 && head[0] == 0xFF && head[1] == 0xD8 && head[2] == 0xFF) return jpeg;
+  return {};
+}
+
+int trailer_complete(const char* path, bool by_content) {
+  const std::string marker = end_marker(path, by_content);
+  if (marker.empty()) return -1;
+  std::FILE* f = std::fopen(path, "rb");
+  if (!f) return 0;
   std::string tail;
   if (std::fseek(f, 0, SEEK_END) == 0) {
     const long size = std::ftell(f);
@@ -89,7 +102,7 @@ int read_file(const char* path, long long max_values, int* width, int* height, i
     if (f) std::fclose(f);
     if (empty) return report(kIsochartsImageInputError, "cannot read image: the file is empty", message, message_size);
   }
-  if (trailer_complete(path) == 0)
+  if (trailer_complete(path, true) == 0)
     return report(kIsochartsImageInputError, "cannot read image: the file is cut short (no end marker)", message,
                   message_size);
   // Keep alpha as stored (straight): OIIO would otherwise premultiply PNG colours by alpha.
@@ -167,7 +180,7 @@ int write_file(const char* path, int width, int height, int channels, int stride
   // PNG and JPEG are encoded into memory and written here: on a failed write (a full disk)
   // libjpeg's error handler prints its own line and exits the process, and libpng drops the
   // error and reports success with the file cut short. Both are small next to their pixels.
-  const int complete_check = trailer_complete(path);
+  const int complete_check = trailer_complete(path, false);
   std::vector<unsigned char> encoded;
   OIIO::Filesystem::IOVecOutput memory(encoded);
   const bool in_memory = complete_check >= 0 && out->supports("ioproxy") && out->set_ioproxy(&memory);
@@ -207,7 +220,7 @@ int write_file(const char* path, int width, int height, int channels, int stride
   // report success with the file cut short: check its end marker. Other formats' writers
   // (OpenEXR, TIFF) report write errors themselves; their header is re-read as a cheap check,
   // not the pixels (a large EXR would cost its whole size in memory again).
-  const int complete = trailer_complete(path);
+  const int complete = trailer_complete(path, false);
   bool whole = complete == 1;
   if (complete < 0) {
     auto in = OIIO::ImageInput::open(path);
