@@ -200,6 +200,7 @@ int write_file(const char* path, int width, int height, int channels, int stride
   }
   if (attributes)
     for (const char* const* a = attributes; a[0] && a[1]; a += 2) spec.attribute(a[0], a[1]);
+  if (!spec.find_attribute("DateTime")) spec.attribute("DateTime", "");
   auto fail = [&](const std::string& detail) {
     out.reset();
     std::remove(path);

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "isochart/error.h"
@@ -135,6 +136,13 @@ TEST_CASE("EXR round trip keeps float values exactly", "[image]") {
   REQUIRE(b.height == 3);
   REQUIRE(b.channels == 3);
   CHECK(a.pixels == b.pixels);
+  // No capture date: the same image gives the same bytes at any time (OpenImageIO would stamp
+  // the current time into the header's capDate).
+  std::ifstream in(dir.file("geo.exr"), std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string stamp("capDate\0string\0", 15);
+  const std::size_t at = bytes.find(stamp);
+  if (at != std::string::npos) CHECK(bytes.substr(at + stamp.size(), 4) == std::string(4, '\0'));
 }
 
 TEST_CASE("named channels and attributes reach the file", "[image]") {
