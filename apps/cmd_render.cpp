@@ -2,6 +2,7 @@
 // its UV layout.
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -30,6 +31,7 @@ struct RenderArgs {
   int supersample = 2;
   double aspect = 0;  // --uv-layout: texture width / height (0: square)
   std::string up = "y";  // the model's up axis: x, y, z, -x, -y or -z
+  bool views_or_up_given = false;
 };
 
 isochart::Vec3d up_axis(const std::string& name) {
@@ -49,6 +51,12 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   if (a.uv_layout && (!a.texture.empty() || a.wireframe || a.ortho || a.transparent))
     bad_option(
         "--uv-layout draws the atlas itself; it takes no --texture, --wireframe, --ortho or --transparent");
+  if (a.uv_layout && a.views_or_up_given) bad_option("--uv-layout draws texture space; it takes no --views or --up");
+  if (a.transparent) {
+    std::string ext = a.output.substr(std::min(a.output.size(), a.output.find_last_of('.')));
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == ".jpg" || ext == ".jpeg") bad_option("--transparent needs an image with alpha (.png, .exr, .tif), not JPEG");
+  }
   if (a.aspect > 0 && !a.uv_layout) bad_option("--aspect goes with --uv-layout");
   const double aspect = a.aspect > 0 ? a.aspect : 1.0;
   // A layout picture defaults to the texture's proportions, its longer side 1024.
@@ -162,7 +170,10 @@ void add_render(CLI::App& app, Context& ctx, Action& action) {
       "  isocharts render builtin:creature -o creature.png --views 4 --width 1600 --height 400\n"
       "  isocharts render atlas.obj --charts --wireframe -o charts.png\n"
       "  isocharts render atlas.obj --uv-layout -o layout.png");
-  sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_render(ctx, *args); }; });
+  sub->callback([&ctx, args, sub, &action] {
+    args->views_or_up_given = sub->count("--views") > 0 || sub->count("--up") > 0;
+    action = [&ctx, args] { run_render(ctx, *args); };
+  });
 }
 
 }  // namespace cli

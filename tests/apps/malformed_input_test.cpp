@@ -350,6 +350,14 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --width 4096 --height 4096", err) ==
         2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --width/--height/--supersample: 4096x4096 pixels"));
+  // Options that would be ignored are refused.
+  CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.jpg").string() + "' --transparent", err) == 2);
+  CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --transparent needs an image with alpha"));
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --no-psnr --psnr-samples 5", err) ==
+        2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --psnr-samples does nothing with --no-psnr\n"));
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --signal-use full", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --signal-use goes with --signal\n"));
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --aspect 2", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect goes with --uv-layout\n"));
   // An even neighbourhood is refused before any work.
