@@ -167,7 +167,9 @@ void write_image(const std::string& path, const Image& image) {
   if (ext.empty()) throw InputError(path, "output image needs an extension (.png, .jpg, .exr, ...)");
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw InputError(path, "output directory does not exist");
+  if (!fs::is_directory(dir, ec))
+    throw InputError(path, fs::exists(dir, ec) ? "cannot write: " + dir.string() + " is not a directory"
+                                               : "output directory does not exist");
   const IsochartsImageModule& m = image_module();
 
   // Same directory (so the rename is atomic), same extension (so the writer picks the

@@ -161,6 +161,7 @@ using namespace io_detail;
 
 MeshFormat format_from_path(const std::string& path) {
   if (path.rfind("builtin:", 0) == 0) return MeshFormat::Builtin;
+  if (path.empty()) throw InputError("", "an empty file name was given for a mesh");
   const auto slash = path.find_last_of('/');
   const auto dot = path.find_last_of('.');
   if (dot == std::string::npos || (slash != std::string::npos && dot < slash))
