@@ -211,9 +211,9 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
       ->check(cli::positive);
   sub->add_option("--direction", args->direction, "Exemplar x axis on the surface, x,y,z (default: smooth field)")
       ->delimiter(',');
-  sub->add_option("--levels", args->levels, "MCGIM pyramid resolutions, any order (default 256,128,64,32)")
+  sub->add_option("--levels", args->levels, "MCGIM pyramid resolutions, any order (default 256,128,64,32; at most 2048)")
       ->delimiter(',')
-      ->check(CLI::Range(8, 4096));
+      ->check(CLI::Range(8, 2048));
   sub->add_option("--neighborhood", args->neighborhood, "Side of the current-level neighbourhood (odd, default 5)")
       ->check(CLI::Range(3, 15));
   sub->add_option("--coarse-neighborhood", args->coarse_neighborhood,
