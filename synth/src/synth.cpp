@@ -559,13 +559,18 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
         res.scale = min_scale;
       } else {
         const double f = res.scale * finest_texel;
+        // Printed rounded up to four digits, so that the value shown is one that works.
+        const double digits = std::pow(10.0, 3 - std::floor(std::log10(min_scale)));
+        const double shown_scale = std::ceil(min_scale * digits - 1e-6) / digits;
+        const double pdigits = std::pow(10.0, 3 - std::floor(std::log10(min_factor)));
+        const double shown_factor = std::ceil(min_factor * pdigits - 1e-6) / pdigits;
         char buf[400];
         std::snprintf(buf, sizeof buf,
-                      "exemplar scale too small: the %dx%d exemplar would be magnified to %.3gx%.3g pixels at "
-                      "the finest level, larger than that level's whole %.0f-sample image; the smallest scale "
-                      "is %.4g exemplar pixels per unit length (%.4g pixels per texel)",
-                      exemplar.width, exemplar.height, exemplar.width / f, exemplar.height / f, level_pixels,
-                      min_scale, min_factor);
+                      "exemplar scale too small: it would magnify the %dx%d exemplar %.4g times, to %.0fx%.0f "
+                      "pixels, more than both its own size and the finest level's %.0f samples; the smallest "
+                      "scale is %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel)",
+                      exemplar.width, exemplar.height, 1 / f, exemplar.width / f, exemplar.height / f, level_pixels,
+                      shown_scale, shown_factor);
         throw isochart::InputError("", buf);
       }
     }
