@@ -211,23 +211,35 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
   RawMesh raw;
   raw.source = path;
   std::string_view line, rest, tok;
+  if (data.substr(0, 3) == "\xEF\xBB\xBF") data.remove_prefix(3);  // a UTF-8 byte-order mark
   if (data.substr(0, 3) != "ply" || (data.size() > 3 && data[3] != '\n' && data[3] != '\r'))
     throw InputError(path, "not a PLY file (it does not start with 'ply')");
-  // The header is text up to the end_header line; a binary body follows it directly.
-  std::size_t end_header = data.find("\nend_header");
+  // The header is text up to the end_header line; a binary body follows it directly, so the
+  // end of that line is read in the style of the first line (LF, CR LF or CR): a body starting
+  // with byte 10 after a CR-only header is not taken for a line end.
+  const std::string_view eol = data.substr(3, 2) == "\r\n" ? "\r\n" : data.substr(3, 1) == "\r" ? "\r" : "\n";
+  std::size_t end_header = std::string_view::npos;
+  for (std::size_t at = data.find("end_header"); at != std::string_view::npos; at = data.find("end_header", at + 1))
+    if (data[at - 1] == '\n' || data[at - 1] == '\r') {
+      end_header = at;
+      break;
+    }
   if (end_header == std::string_view::npos)
     throw InputError(path, "PLY header has no end_header line (truncated file or not a PLY file)");
-  std::size_t body_start = end_header + 11;
-  if (body_start < data.size() && data[body_start] == '\r') ++body_start;
-  if (body_start < data.size() && data[body_start] != '\n')
+  std::size_t body_start = end_header + 10;
+  if (data.substr(body_start, eol.size()) == eol) {
+    body_start += eol.size();
+  } else if (data.substr(body_start, 1) == "\n" || data.substr(body_start, 2) == "\r\n") {
+    body_start += data[body_start] == '\n' ? 1 : 2;  // a header mixing line ends
+  } else if (body_start < data.size()) {
     throw InputError(path, "PLY header has no end_header line (truncated file or not a PLY file)");
-  if (body_start < data.size()) ++body_start;
+  }
   const std::string_view body = data.substr(body_start);
 
   enum class Format { Ascii, LittleEndian, BigEndian } format = Format::Ascii;
   bool saw_format = false;
   std::vector<Element> elements;
-  LineScanner lines(path, data.substr(0, end_header + 1));
+  LineScanner lines(path, data.substr(0, end_header));
   lines.next(line);  // "ply"
   while (lines.next(line)) {
     const long long ln = lines.line_number();

@@ -192,6 +192,23 @@ TEST_CASE("text formats: a byte-order mark and lone CR line ends are read like p
   const RawMesh off = read_raw_mesh(d.write("m.off", "\xEF\xBB\xBFOFF\r3 1 0\r0 0 0\r1 0 0\r0 1 0\r3 0 1 2\r"));
   CHECK(off.positions.size() == 3);
   CHECK(off.polygons.size() == 1);
+  // PLY: a BOM, and a CR-only header before a binary body whose first byte is 10 (LF).
+  const std::string header = "ply\rformat binary_little_endian 1.0\relement vertex 3\rproperty float x\r"
+                             "property float y\rproperty float z\relement face 1\r"
+                             "property list uchar int vertex_indices\rend_header\r";
+  std::string body;
+  auto put = [&](const void* p, std::size_t n) { body.append(static_cast<const char*>(p), n); };
+  const float xyz[9] = {1.4e-44f /* bytes 0a 00 00 00 */, 0, 0, 1, 0, 0, 0, 1, 0};
+  put(xyz, sizeof xyz);
+  const unsigned char three = 3;
+  const int idx[3] = {0, 1, 2};
+  put(&three, 1);
+  put(idx, sizeof idx);
+  const RawMesh ply = read_raw_mesh(d.write("m.ply", "\xEF\xBB\xBF" + header + body));
+  REQUIRE(ply.positions.size() == 3);
+  CHECK(ply.positions[1] == Vec3d{1, 0, 0});
+  REQUIRE(ply.polygons.size() == 1);
+  CHECK(ply.polygons[0] == std::vector<int>{0, 1, 2});
 }
 
 TEST_CASE("OBJ: faces without texture coordinates next to faces with them get (0, 0)", "[io]") {
