@@ -20,6 +20,21 @@ struct Context::ProgressState {
 
 Context::Context() : progress_state(std::make_shared<ProgressState>()) {}
 
+void Context::check_paths(const std::vector<std::string>& inputs, std::vector<std::string> outputs) const {
+  if (!opts.report.empty()) outputs.push_back(opts.report);
+  auto real = [](const std::string& p) { return !p.empty() && p.rfind("builtin:", 0) != 0; };
+  for (std::size_t k = 0; k < outputs.size(); ++k) {
+    const std::string& out = outputs[k];
+    if (!real(out)) continue;
+    for (const std::string& in : inputs)
+      if (real(in) && isochart::same_file(in, out))
+        throw isochart::InputError(out, "cannot write: it is an input of this run and would be overwritten");
+    for (std::size_t j = 0; j < k; ++j)
+      if (real(outputs[j]) && isochart::same_file(outputs[j], out))
+        throw isochart::InputError(out, "cannot write: given as two outputs of this run");
+  }
+}
+
 void Context::warn(const std::string& file, const std::string& message) const {
   if (opts.quiet) return;
   end_progress();

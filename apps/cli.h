@@ -40,6 +40,9 @@ struct Context {
   void end_progress() const;
   /// Loads a mesh with the global repair setting, printing repair warnings.
   isochart::LoadResult load(const std::string& path) const;
+  /// Refuses, before any work, an output (the --report file included) that is one of the
+  /// inputs or another output; the writers check again at the end (outputs named later).
+  void check_paths(const std::vector<std::string>& inputs, std::vector<std::string> outputs) const;
   /// Prints `text` (or the JSON when --json) on stdout, and writes the --report file.
   void emit(const nlohmann::json& result, const std::string& text) const;
 

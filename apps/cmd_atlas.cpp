@@ -40,6 +40,12 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     if (fmt != isochart::MeshFormat::Obj && fmt != isochart::MeshFormat::Glb && fmt != isochart::MeshFormat::Ply)
       throw isochart::InputError(out, "output must be .obj, .glb or .ply");
   }
+  {
+    std::vector<std::string> outs = a.outputs;
+    for (const std::string* o : {&a.png, &a.imt_out, &a.signal_texture_out}) outs.push_back(*o);
+    const std::string tex = a.signal.rfind("texture:", 0) == 0 ? a.signal.substr(8) : std::string();
+    ctx.check_paths({a.input, tex}, outs);
+  }
   a.options.seed = ctx.opts.seed;
   a.options.graph_cut = !a.no_graph_cut;
   a.options.merge = !a.no_merge;

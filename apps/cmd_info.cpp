@@ -15,6 +15,7 @@ struct InfoArgs {
 
 void run_info(const Context& ctx, const InfoArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
+  ctx.check_paths({a.input}, {});
   isochart::LoadResult r = ctx.load(a.input);
   const isochart::Mesh& m = r.mesh;
   const isochart::Topology topo(m);

@@ -29,6 +29,7 @@ isochart::Mesh load_any(const Context& ctx, const std::string& path) {
 
 void run_psnr(const Context& ctx, const PsnrArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
+  ctx.check_paths({a.a, a.b}, {});
   const isochart::Mesh ma = load_any(ctx, a.a), mb = load_any(ctx, a.b);
   mcgim::DistanceOptions o;
   o.samples = a.samples;

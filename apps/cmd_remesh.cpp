@@ -2,6 +2,7 @@
 // pyramid), the remesh of each level, its watertightness checks and its geometric PSNR.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -92,6 +93,22 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   if (a.has("--psnr-samples") && a.no_psnr) bad_option("--psnr-samples does nothing with --no-psnr");
   if (a.keep_chart_sizes && a.atlas.empty())
     bad_option("--keep-chart-sizes goes with --atlas (a signal atlas given as a file)");
+  {
+    // Outputs whose sizes are known now (not those of --samples, checked when written).
+    const std::string tex = a.signal.rfind("texture:", 0) == 0 ? a.signal.substr(8) : std::string();
+    const std::vector<std::string> inputs{a.input, a.atlas, tex};
+    ctx.check_paths(inputs, {a.output});
+    std::vector<std::array<int, 2>> sizes;
+    for (int r : a.levels) sizes.push_back({r, r});
+    if (a.res > 0) sizes.push_back({a.res, a.res});
+    if (a.width > 0) sizes.push_back({a.width, a.height});
+    for (const auto& [w, h] : sizes) {
+      std::vector<std::string> derived{level_path(a.output, w, h, true)};
+      if (!a.exr.empty()) derived.push_back(image_path(a.exr, w, h, ".exr"));
+      if (!a.png.empty()) derived.push_back(image_path(a.png, w, h, ".png"));
+      for (const std::string& d : derived) ctx.check_paths(inputs, {d});
+    }
+  }
   isochart::format_from_path(a.output);  // reject an unknown output extension before working
 
   const isochart::Mesh input = load_any(ctx, a.input);

@@ -59,6 +59,13 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   const isochart::MeshFormat fmt = isochart::format_from_path(a.output);
   if (fmt != isochart::MeshFormat::Glb && fmt != isochart::MeshFormat::Obj)
     throw isochart::InputError(a.output, "synth writes .glb or .obj (both are written, with PNG textures)");
+  {
+    const std::string stem = stem_of(a.output);
+    std::vector<std::string> outs;
+    for (const char* tail : {".glb", ".obj", ".mtl", ".png", "_mcgim.glb", "_mcgim.obj", "_mcgim.mtl", "_mcgim.png"})
+      outs.push_back(stem + tail);
+    ctx.check_paths({a.input, a.exemplar}, outs);
+  }
   if (!a.direction.empty() && a.direction.size() != 3) bad_option("--direction takes three numbers x,y,z");
   if (!a.direction.empty()) {
     const double n2 = a.direction[0] * a.direction[0] + a.direction[1] * a.direction[1] + a.direction[2] * a.direction[2];

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
+#include <climits>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -277,6 +278,22 @@ OutputBatch* batch = nullptr;
 std::set<std::pair<dev_t, ino_t>> batch_inputs;
 }  // namespace
 
+bool same_file(const std::string& a, const std::string& b) {
+  struct stat sa, sb;
+  const bool ea = ::stat(a.c_str(), &sa) == 0, eb = ::stat(b.c_str(), &sb) == 0;
+  if (ea && eb) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  if (ea != eb) return false;
+  // Neither exists: compare the resolved directories and the names.
+  auto resolved = [](const std::string& p) {
+    const auto slash = p.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : p.substr(0, slash);
+    const std::string name = slash == std::string::npos ? p : p.substr(slash + 1);
+    char buf[PATH_MAX];
+    return ::realpath(dir.c_str(), buf) ? std::string(buf) + "/" + name : p;
+  };
+  return resolved(a) == resolved(b);
+}
+
 void note_input_file(const std::string& path) {
   struct stat st;
   if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
@@ -348,7 +365,7 @@ bool OutputBatch::stage(const std::string& tmp, const std::string& target) {
   // Two outputs of one run on one path (`-o a.obj -o a.obj`, --texture-out and --imt-out
   // alike): the first would be lost, so the run is refused.
   for (auto& [t, g] : batch->staged_)
-    if (g == target) {
+    if (g == target || same_file(g, target)) {
       std::remove(tmp.c_str());
       throw InputError(target, "cannot write: given as two outputs of this run");
     }

@@ -304,10 +304,27 @@ TEST_CASE("an output over an input of the run, or two outputs on one path, are r
                                               "overwritten\n"));
     CHECK(read_bytes(mesh) == before);
   }
+  // The input reached by another spelling or a hard link; found before the mesh is loaded.
+  fs::create_hard_link(mesh, tmp.path / "hard.obj");
+  for (const std::string& out : {(tmp.path / "." / "s.obj").string(), (tmp.path / "hard.obj").string()}) {
+    CAPTURE(out);
+    CHECK(run_cli("synth '" + mesh.string() + "' -o '" + out + "' --levels 64,32", err) == 2);
+    CHECK_THAT(read_bytes(err), Catch::Equals("isocharts: error: " + out +
+                                              ": cannot write: it is an input of this run and would be "
+                                              "overwritten\n"));
+  }
+  fs::remove(tmp.path / "hard.obj");
+  CHECK(read_bytes(mesh) == before);
   const fs::path twice = tmp.path / "t.obj";
   CHECK(run_cli("-q atlas builtin:sphere -o '" + twice.string() + "' -o '" + twice.string() + "'", err) == 2);
   CHECK_THAT(read_bytes(err),
              Catch::Equals("isocharts: error: " + twice.string() + ": cannot write: given as two outputs of this run\n"));
+  const std::string other = (tmp.path / "sub" / ".." / "t.obj").string();
+  fs::create_directory(tmp.path / "sub");
+  CHECK(run_cli("atlas builtin:sphere -o '" + twice.string() + "' --report '" + other + "'", err) == 2);
+  CHECK_THAT(read_bytes(err),
+             Catch::Equals("isocharts: error: " + other + ": cannot write: given as two outputs of this run\n"));
+  fs::remove(tmp.path / "sub");
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt", "s.obj"});
 }
 

@@ -83,6 +83,10 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
 /// \throw InputError(path, "cannot write: REASON").
 void write_file_atomic(const std::string& path, const std::string& data);
 
+/// Whether two paths name one file: the same device and inode when both exist, else the same
+/// path once `.`, `..` and symbolic links are resolved (an output not written yet).
+bool same_file(const std::string& a, const std::string& b);
+
 /// Records that the run read `path`: while an OutputBatch is open, an output over that file
 /// (the same file, through any name or link) is refused. The readers call it.
 void note_input_file(const std::string& path);
