@@ -423,27 +423,122 @@ void weld_equal_positions(RawMesh& raw) {
     }
   };
   const std::size_t nv = raw.positions.size();
+  for (const auto& poly : raw.polygons)
+    for (int v : poly)
+      if (v < 0 || static_cast<std::size_t>(v) >= nv) return;  // validation names the bad index
   std::unordered_map<Key, int, Hash> first;
   first.reserve(nv);
-  std::vector<int> to(nv);
-  std::vector<Vec3d> positions, normals, colors;
-  positions.reserve(nv);
+  std::vector<int> to(nv), members;
   for (std::size_t v = 0; v < nv; ++v) {
     Key k{};
     for (int i = 0; i < 3; ++i) {
       const double x = raw.positions[v][i] == 0 ? 0.0 : raw.positions[v][i];  // −0 joins +0
       std::memcpy(&k.b[i], &x, sizeof x);
     }
-    const auto [it, inserted] = first.emplace(k, static_cast<int>(positions.size()));
+    const auto [it, inserted] = first.emplace(k, static_cast<int>(members.size()));
     to[v] = it->second;
-    if (!inserted) continue;
-    positions.push_back(raw.positions[v]);
-    if (!raw.normals.empty()) normals.push_back(raw.normals[v]);
-    if (!raw.colors.empty()) colors.push_back(raw.colors[v]);
+    if (inserted) members.push_back(0);
+    ++members[to[v]];
+  }
+  if (members.size() == nv) return;
+
+  // A join is undone where it is not a seam being closed but separate surfaces meeting: an edge
+  // of more than two faces, a face repeated, or faces around the joined vertex that do not form
+  // one fan (two cubes sharing a face, an edge or a corner stay two closed cubes, as in OBJ).
+  const std::size_t nw = members.size();
+  std::vector<char> bad(nw, 0);  // 1: undo the join, 2: one vertex per fan (3: to be decided)
+  std::unordered_map<int, int> fan_of;           // for 2: input vertex -> its fan's id
+  auto joined = [&](int w) { return members[w] > 1; };
+  {
+    std::unordered_map<std::uint64_t, int> edge_faces;
+    std::unordered_map<std::uint64_t, std::vector<int>> seen_faces;  // sorted triple hash -> faces
+    std::vector<std::vector<std::array<int, 3>>> fan(nw);  // per joined vertex and face: neighbours, corner
+    for (std::size_t f = 0; f < raw.polygons.size(); ++f) {
+      const auto& poly = raw.polygons[f];
+      const std::size_t n = poly.size();
+      for (std::size_t i = 0; i < n; ++i) {
+        const int a = to[poly[i]], b = to[poly[(i + 1) % n]];
+        const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+        if (++edge_faces[key] == 3)
+          for (int w : {a, b})
+            if (joined(w) && bad[w] == 0) bad[w] = 3;  // separated by fans below if it can be
+        if (joined(a)) fan[a].push_back({to[poly[(i + n - 1) % n]], b, poly[i]});
+      }
+      std::vector<int> w(n), o(poly.begin(), poly.end());
+      for (std::size_t i = 0; i < n; ++i) w[i] = to[poly[i]];
+      std::sort(w.begin(), w.end());
+      std::sort(o.begin(), o.end());
+      std::uint64_t h = 1469598103934665603ull;
+      for (int x : w) h = (h ^ static_cast<std::uint32_t>(x)) * 1099511628211ull;
+      auto& same = seen_faces[h];
+      for (int g : same) {
+        std::vector<int> wg, og(raw.polygons[g].begin(), raw.polygons[g].end());
+        for (int v : raw.polygons[g]) wg.push_back(to[v]);
+        std::sort(wg.begin(), wg.end());
+        std::sort(og.begin(), og.end());
+        if (wg == w && og != o)  // a repeat made by the join, not by the file
+          for (int x : w)
+            if (joined(x)) bad[x] = 1;
+      }
+      same.push_back(static_cast<int>(f));
+    }
+    for (std::size_t w = 0; w < nw; ++w) {
+      if (!joined(static_cast<int>(w)) || bad[w] == 1 || fan[w].size() < 2) continue;
+      // Faces around w are linked through the neighbours they share.
+      const std::size_t m = fan[w].size();
+      std::vector<std::size_t> parent(m);
+      for (std::size_t i = 0; i < m; ++i) parent[i] = i;
+      auto find = [&](std::size_t i) {
+        while (parent[i] != i) i = parent[i] = parent[parent[i]];
+        return i;
+      };
+      std::unordered_map<int, std::size_t> by_neighbour;
+      for (std::size_t i = 0; i < m; ++i)
+        for (int k = 0; k < 2; ++k) {
+          // Only through edges of two faces: pieces meeting along an edge are not one fan.
+          const int x = fan[w][i][k], lo = std::min(static_cast<int>(w), x), hi = std::max(static_cast<int>(w), x);
+          if (edge_faces[(static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint32_t>(hi)] > 2) continue;
+          const auto [it, inserted] = by_neighbour.emplace(x, i);
+          if (!inserted) parent[find(i)] = find(it->second);
+        }
+      std::size_t roots = 0;
+      for (std::size_t i = 0; i < m; ++i) roots += find(i) == i;
+      if (roots > 1) {
+        // Each fan keeps its own joined vertex (the seams inside each piece stay closed).
+        bad[w] = 2;
+        for (std::size_t i = 0; i < m; ++i) fan_of.emplace(fan[w][i][2], static_cast<int>(find(i)));
+      } else if (bad[w] == 3) {
+        bad[w] = 1;  // one fan yet an edge of three faces or more: the join is undone
+      }
+    }
+  }
+
+  for (char& b : bad)
+    if (b == 3) b = 1;
+  std::vector<int> id(nw, -1), final_of(nv);
+  std::map<std::pair<int, int>, int> fan_id;
+  std::vector<Vec3d> positions, normals, colors;
+  positions.reserve(nw);
+  for (std::size_t v = 0; v < nv; ++v) {
+    const int w = to[v];
+    int* slot = &id[w];
+    if (bad[w] == 2) {
+      const auto f = fan_of.find(static_cast<int>(v));
+      slot = &fan_id.try_emplace({w, f == fan_of.end() ? -1 - static_cast<int>(v) : f->second}, -1).first->second;
+    }
+    if (bad[w] == 1 || *slot < 0) {
+      final_of[v] = static_cast<int>(positions.size());
+      if (bad[w] != 1) *slot = final_of[v];
+      positions.push_back(raw.positions[v]);
+      if (!raw.normals.empty()) normals.push_back(raw.normals[v]);
+      if (!raw.colors.empty()) colors.push_back(raw.colors[v]);
+    } else {
+      final_of[v] = *slot;
+    }
   }
   if (positions.size() == nv) return;
   for (auto& poly : raw.polygons)
-    for (int& v : poly) v = to[v];
+    for (int& v : poly) v = final_of[v];
   raw.positions = std::move(positions);
   if (!raw.normals.empty()) raw.normals = std::move(normals);
   if (!raw.colors.empty()) raw.colors = std::move(colors);

@@ -629,6 +629,42 @@ TEST_CASE("glb round trip, deterministic bytes", "[io]") {
   check_same_corners(m, r.mesh, 1e-7, true);
 }
 
+TEST_CASE("glb: separate pieces touching at a face, an edge or a corner are not joined", "[io]") {
+  TempDir d;
+  // With UV seams on every edge (24 vertices a cube in the glb) for pieces meeting along an
+  // edge or at a corner; without UVs (8 a cube) for a shared face: a seam-split cube touching
+  // another at a face comes back cut open along that face (the join is undone there, as the
+  // two cubes' faces on it cannot be told apart without their geometry).
+  for (const Vec3d& offset : {Vec3d{1, 0, 0}, Vec3d{1, 1, 0}, Vec3d{1, 1, 1}}) {
+    CAPTURE(offset.x, offset.y, offset.z);
+    Mesh cube = attributed_cube();
+    if (offset.y == 0) {
+      cube.uvs.clear();
+      cube.face_uvs.clear();
+    }
+    Mesh two = cube;
+    const int nv = static_cast<int>(cube.positions.size()), nt = static_cast<int>(cube.uvs.size());
+    for (const Vec3d& p : cube.positions) two.positions.push_back(p + offset);
+    two.normals.insert(two.normals.end(), cube.normals.begin(), cube.normals.end());
+    two.colors.insert(two.colors.end(), cube.colors.begin(), cube.colors.end());
+    two.uvs.insert(two.uvs.end(), cube.uvs.begin(), cube.uvs.end());
+    for (int f = 0; f < cube.num_faces(); ++f) {
+      two.faces.push_back({cube.faces[f][0] + nv, cube.faces[f][1] + nv, cube.faces[f][2] + nv});
+      if (cube.has_uvs())
+        two.face_uvs.push_back({cube.face_uvs[f][0] + nt, cube.face_uvs[f][1] + nt, cube.face_uvs[f][2] + nt});
+      two.face_groups.push_back(cube.face_groups[f] + 6);
+    }
+    save_mesh(two, d.file("two.glb"));
+    const LoadResult r = load_mesh(d.file("two.glb"));
+    // As from an OBJ: two closed cubes, no repair needed.
+    CHECK(r.report.warnings.empty());
+    CHECK(r.mesh.num_vertices() == 16);
+    CHECK(r.mesh.num_faces() == 24);
+    CHECK(r.report.components == 2);
+    CHECK(Topology(r.mesh).boundary_loops().empty());
+  }
+}
+
 TEST_CASE("textures: OBJ gets an MTL, glb embeds the image", "[io]") {
   TempDir d;
   const Mesh m = attributed_cube();
