@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -105,6 +107,11 @@ void Context::emit(const nlohmann::json& result, const std::string& text) const 
 }
 
 void bad_option(const std::string& message) { throw isochart::InputError("", message); }
+
+std::array<int, 2> layout_size(int longer, double aspect) {
+  const int shorter = std::max(16, static_cast<int>(std::lround(longer / std::max(aspect, 1 / aspect))));
+  return aspect >= 1 ? std::array<int, 2>{longer, shorter} : std::array<int, 2>{shorter, longer};
+}
 
 void check_levels(const std::vector<int>& levels) {
   for (std::size_t i = 0; i < levels.size(); ++i)

@@ -2,6 +2,7 @@
 // Conventions shared by every subcommand: global options, progress line, warnings, and
 // how results reach stdout (text or JSON) and the --report file.
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -93,6 +94,15 @@ void add_sae(CLI::App& app, Context& ctx, Action& action);
 /// Refuses a pyramid resolution given twice in --levels (it would be built and written twice
 /// to the same file).
 void check_levels(const std::vector<int>& levels);
+
+/// A layout picture in a texture's proportions (width / height = `aspect`), its longer side
+/// `longer` pixels and its shorter at least 16.
+std::array<int, 2> layout_size(int longer, double aspect);
+
+/// The image of a `texture:IMG` signal (an input of the run), else "".
+inline std::string signal_texture(const std::string& signal) {
+  return signal.rfind("texture:", 0) == 0 ? signal.substr(8) : std::string();
+}
 
 /// Seconds since `t0`.
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {

@@ -43,8 +43,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   {
     std::vector<std::string> outs = a.outputs;
     for (const std::string* o : {&a.png, &a.imt_out, &a.signal_texture_out}) outs.push_back(*o);
-    const std::string tex = a.signal.rfind("texture:", 0) == 0 ? a.signal.substr(8) : std::string();
-    ctx.check_paths({a.input, tex}, outs);
+    ctx.check_paths({a.input, signal_texture(a.signal)}, outs);
   }
   a.options.seed = ctx.opts.seed;
   a.options.graph_cut = !a.no_graph_cut;
@@ -92,8 +91,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   if (!a.png.empty()) {
     // The picture has the texture's proportions, its longer side --png-size pixels.
     const double aspect = static_cast<double>(a.options.pack.width) / a.options.pack.height;
-    const int pw = aspect >= 1 ? a.png_size : std::max(16, static_cast<int>(std::lround(a.png_size * aspect)));
-    const int ph = aspect >= 1 ? std::max(16, static_cast<int>(std::lround(a.png_size / aspect))) : a.png_size;
+    const auto [pw, ph] = layout_size(a.png_size, aspect);
     isochart::write_image(a.png, isochart::render_uv_layout(out_mesh, pw, ph, aspect));
   }
   const auto& s = atlas.stats;

@@ -782,10 +782,13 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   int n = 0;
   for (const auto& m : a.meshes)
     for (const Method& meth : methods)
-      n += meth.kind == Kind::ExternalAuto && methods.size() > 1
-               ? static_cast<int>(auto_externals(a.data, stem(m)).size())
-               : meth.kind == Kind::ExternalAuto ? std::max<int>(1, auto_externals(a.data, stem(m)).size())
-                                                 : 1;
+      if (meth.kind != Kind::ExternalAuto) {
+        ++n;
+      } else {
+        // Alone, a mesh without baseline atlases still gets its n/a row.
+        const int found = static_cast<int>(auto_externals(a.data, stem(m)).size());
+        n += methods.size() > 1 ? found : std::max(1, found);
+      }
   for (const auto& m : a.meshes) bench.run_mesh(m, k, n);
 
   const std::string md = to_markdown(bench.rows(), bench.sweep_points(), a);

@@ -95,8 +95,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     bad_option("--keep-chart-sizes goes with --atlas (a signal atlas given as a file)");
   {
     // Outputs whose sizes are known now (not those of --samples, checked when written).
-    const std::string tex = a.signal.rfind("texture:", 0) == 0 ? a.signal.substr(8) : std::string();
-    const std::vector<std::string> inputs{a.input, a.atlas, tex};
+    const std::vector<std::string> inputs{a.input, a.atlas, signal_texture(a.signal)};
     ctx.check_paths(inputs, {a.output});
     std::vector<std::array<int, 2>> sizes;
     for (int r : a.levels) sizes.push_back({r, r});

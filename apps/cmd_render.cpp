@@ -61,8 +61,7 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   if (a.aspect > 0 && !a.uv_layout) bad_option("--aspect goes with --uv-layout");
   const double aspect = a.aspect > 0 ? a.aspect : 1.0;
   // A layout picture defaults to the texture's proportions, its longer side 1024.
-  const int layout_w = aspect >= 1 ? 1024 : std::max(16, static_cast<int>(std::lround(1024 * aspect)));
-  const int layout_h = aspect >= 1 ? std::max(16, static_cast<int>(std::lround(1024 / aspect))) : 1024;
+  const auto [layout_w, layout_h] = layout_size(1024, aspect);
   const int width = a.width > 0 ? a.width : (a.uv_layout ? layout_w : 400 * a.views);
   const int height = a.height > 0 ? a.height : (a.uv_layout ? layout_h : 400);
   if (static_cast<long long>(width) * height * a.supersample * a.supersample > (1LL << 25))

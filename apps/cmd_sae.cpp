@@ -36,8 +36,7 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const int width = a.width > 0 ? a.width : a.res;
   const int height = a.height > 0 ? a.height : a.res;
-  ctx.check_paths({a.input, a.source, a.signal.rfind("texture:", 0) == 0 ? a.signal.substr(8) : std::string()},
-                  {a.texture_out, a.imt_out});
+  ctx.check_paths({a.input, a.source, signal_texture(a.signal)}, {a.texture_out, a.imt_out});
   isochart::Mesh mesh = ctx.load(a.input).mesh;
   if (!mesh.has_uvs())
     throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");

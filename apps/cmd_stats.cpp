@@ -26,12 +26,7 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
   if (!r.mesh.has_uvs())
     throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
   isochart::AtlasQuality q = isochart::measure_atlas(r.mesh);
-  if (a.aspect != 1) {
-    // Stretch in texels: a unit of u is `aspect` times as long as a unit of v on the texture.
-    isochart::Mesh texels = r.mesh;
-    for (isochart::Vec2d& uv : texels.uvs) uv.x *= a.aspect;
-    q.stretch = isochart::measure_stretch(texels);
-  }
+  if (a.aspect != 1) q.stretch = isochart::measure_texture_stretch(r.mesh, a.aspect);
 
   nlohmann::json j;
   j["file"] = a.input;

@@ -106,9 +106,7 @@ void pack_weighted(const Mesh& mesh, Atlas& atlas, std::vector<detail::AtlasChar
     for (size_t v = 0; v < charts[i].uv_ids.size(); ++v) atlas.uvs[charts[i].uv_ids[v]] = pc[i].uv[v];
   }
   const Mesh m = atlas.apply_to(mesh);
-  Mesh texels = m;  // stretch on the texture, as in pack_atlas
-  for (Vec2d& uv : texels.uvs) uv = {uv.x * po.width, uv.y * po.height};
-  const StretchStats st = measure_stretch(texels);
+  const StretchStats st = measure_texture_stretch(m, static_cast<double>(po.width) / po.height);
   atlas.stats.l2 = st.l2;
   atlas.stats.linf = st.linf;
   atlas.stats.flipped = st.flipped;

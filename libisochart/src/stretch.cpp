@@ -133,6 +133,17 @@ StretchStats measure_stretch(const Mesh& mesh, const std::vector<int>& faces) {
   return st;
 }
 
+StretchStats measure_texture_stretch(const Mesh& mesh, double texture_aspect) {
+  if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates");
+  return accumulate(mesh.num_faces(), [&](int f, Vec3d* q, Vec2d* p) {
+    for (int k = 0; k < 3; ++k) {
+      q[k] = mesh.positions[mesh.faces[f][k]];
+      const Vec2d& uv = mesh.uvs[mesh.face_uvs[f][k]];
+      p[k] = {uv.x * texture_aspect, uv.y};
+    }
+  });
+}
+
 StretchStats measure_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
                              const std::vector<Vec2d>& uv) {
   return accumulate(static_cast<int>(faces.size()), [&](int f, Vec3d* q, Vec2d* p) {

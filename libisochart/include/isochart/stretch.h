@@ -38,6 +38,11 @@ struct StretchStats {
 /// `faces` selects the faces to measure (all when empty).
 StretchStats measure_stretch(const Mesh& mesh, const std::vector<int>& faces = {});
 
+/// The whole mesh's stretch on a texture `texture_aspect` (width / height) times as wide as
+/// high, i.e. in texels: a unit of u is that many times as long as a unit of v. A chart packed
+/// without distortion in texels is anisotropic in [0,1]² when the texture is not square.
+StretchStats measure_texture_stretch(const Mesh& mesh, double texture_aspect);
+
 /// Same with per-vertex UVs (one UV per mesh vertex, as for a single chart).
 StretchStats measure_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
                              const std::vector<Vec2d>& uv);
