@@ -108,6 +108,69 @@ void Context::emit(const nlohmann::json& result, const std::string& text) const 
 
 void bad_option(const std::string& message) { throw isochart::InputError("", message); }
 
+namespace {
+
+// "16384.000000" -> "16384", "0.000061" stays: CLI11 prints range ends with std::to_string.
+std::string trim_number(std::string s) {
+  if (s.find('.') == std::string::npos) return s;
+  while (!s.empty() && s.back() == '0') s.pop_back();
+  if (!s.empty() && s.back() == '.') s.pop_back();
+  return s;
+}
+
+const CLI::Option* find_option(const CLI::App& app, const std::string& name) {
+  if (const CLI::Option* o = app.get_option_no_throw(name)) return o;
+  for (const CLI::App* sub : app.get_subcommands())
+    if (const CLI::Option* o = sub->get_option_no_throw(name)) return o;
+  return nullptr;
+}
+
+// What an option takes, from the type CLI11 recorded for it ("INT", "UINT", "FLOAT", ...).
+std::string expected_kind(const CLI::Option* o) {
+  const std::string type = o ? o->get_type_name() : std::string();
+  if (type.find("UINT") != std::string::npos) return "an integer >= 0";
+  if (type.find("INT") != std::string::npos) return "an integer";
+  if (type.find("FLOAT") != std::string::npos || type.find("NUMBER") != std::string::npos) return "a number";
+  return "";
+}
+
+}  // namespace
+
+std::string parse_error_message(const CLI::App& app, const CLI::ParseError& e) {
+  const std::string msg = e.what();
+  // "Could not convert: --width = abc" (a value of the wrong type, or an integer too large).
+  const std::string convert = "Could not convert: ";
+  if (msg.rfind(convert, 0) == 0) {
+    const std::string rest = msg.substr(convert.size());
+    const auto eq = rest.find(" = ");
+    if (eq == std::string::npos) return msg;
+    const std::string name = rest.substr(0, eq), value = rest.substr(eq + 3);
+    const std::string kind = expected_kind(find_option(app, name));
+    if (kind.empty()) return msg;
+    const bool integer = kind != "a number";
+    const std::string digits = value.size() > 1 && value[0] == '-' ? value.substr(1) : value;
+    if (integer && !digits.empty() && digits.find_first_not_of("0123456789") == std::string::npos)
+      return name + ": " + value + " is out of range for an integer";
+    return name + ": expected " + kind + ", got '" + value + "'";
+  }
+  // "--res: Value 12x not in range 2 to 2048" (CLI::Range, which also refuses what it cannot read).
+  const auto colon = msg.find(": Value ");
+  const auto range = msg.find(" not in range ");
+  const auto to = msg.rfind(" to ");
+  if (colon != std::string::npos && range != std::string::npos && to != std::string::npos && colon < range &&
+      range < to) {
+    const std::string name = msg.substr(0, colon);
+    const std::string value = msg.substr(colon + 8, range - colon - 8);
+    const std::string lo = trim_number(msg.substr(range + 14, to - range - 14));
+    const std::string hi = trim_number(msg.substr(to + 4));
+    std::string kind = expected_kind(find_option(app, name));
+    if (kind.empty() || kind == "an integer >= 0") kind = "an integer";
+    if (lo.find('.') != std::string::npos || hi.find('.') != std::string::npos) kind = "a number";
+    return name + ": expected " + kind + " from " + lo + " to " + hi + ", got '" + value + "'";
+  }
+  return msg;
+}
+
 std::array<int, 2> layout_size(int longer, double aspect) {
   const int shorter = std::max(16, static_cast<int>(std::lround(longer / std::max(aspect, 1 / aspect))));
   return aspect >= 1 ? std::array<int, 2>{longer, shorter} : std::array<int, 2>{shorter, longer};

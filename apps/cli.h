@@ -88,6 +88,10 @@ void add_synth(CLI::App& app, Context& ctx, Action& action);
 void add_bench(CLI::App& app, Context& ctx, Action& action);
 void add_sae(CLI::App& app, Context& ctx, Action& action);
 
+/// CLI11's message for a value it could not read or that is out of a CLI::Range, in our
+/// words ("--width: expected an integer, got 'abc'"); other messages unchanged.
+std::string parse_error_message(const CLI::App& app, const CLI::ParseError& e);
+
 /// Throws InputError(file, msg) for an invalid option value (exit code 2).
 [[noreturn]] void bad_option(const std::string& message);
 

@@ -74,7 +74,7 @@ int main(int argc, char** argv) {
         return 2;
       }
     }
-    std::cerr << "isocharts: error: " << e.what() << "\n";
+    std::cerr << "isocharts: error: " << cli::parse_error_message(app, e) << "\n";
     return 2;
   }
 

@@ -364,6 +364,21 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --scale: expected a positive number, got '0'\n"));
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --levels 64,32,64", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --levels: 64 is given twice\n"));
+  // Values CLI11 cannot read, or outside a range, in our words (it said "Could not convert:
+  // --width = abc" and, for a range, "Value 12x not in range").
+  const std::string atlas = "atlas builtin:sphere -o '" + out.string() + "'";
+  CHECK(run_cli(atlas + " --width abc", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --width: expected an integer, got 'abc'\n"));
+  CHECK(run_cli(atlas + " --width 99999999999999", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --width: 99999999999999 is out of range for an integer\n"));
+  CHECK(run_cli(atlas + " --max-l2 1.1x", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --max-l2: expected a number, got '1.1x'\n"));
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --res 12x", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --res: expected an integer from 2 to 2048, got '12x'\n"));
+  CHECK(run_cli(atlas + " --png-size 5", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --png-size: expected an integer from 16 to 2896, got '5'\n"));
+  CHECK(run_cli("stats builtin:sphere --aspect 0", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect: expected a number from 0.000061 to 16384, got '0'\n"));
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --width 4096 --height 4096", err) ==
         2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --width/--height/--supersample: 4096x4096 pixels"));
