@@ -127,6 +127,8 @@ Image read_image(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "image file not found");
   if (fs::is_directory(path, ec)) throw InputError(path, "is a directory, not an image file");
+  // The image library would read a device or pipe (/dev/zero, a FIFO) without end.
+  if (!fs::is_regular_file(path, ec)) throw InputError(path, "is not a regular file (a device, pipe or socket)");
   note_input_file(path);
 
   const IsochartsImageModule& m = image_module();

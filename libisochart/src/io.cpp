@@ -125,7 +125,8 @@ void append_number(std::string& out, long long v) {
 }
 
 std::string read_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: opening a FIFO would otherwise wait for a writer before it could be refused.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) throw InputError(path, std::string("cannot open file: ") + std::strerror(errno));
   note_input_file(path);
   struct stat st {};
@@ -138,8 +139,18 @@ std::string read_file(const std::string& path) {
     ::close(fd);
     throw InputError(path, "is a directory, not a mesh file");
   }
+  // A device or pipe (/dev/zero, a FIFO) may never end: it would be read until memory ran out.
+  if (!S_ISREG(st.st_mode)) {
+    ::close(fd);
+    throw InputError(path, "is not a regular file (a device, pipe or socket)");
+  }
+  if (static_cast<unsigned long long>(st.st_size) > kMaxInputFileBytes) {
+    ::close(fd);
+    throw InputError(path, "is " + std::to_string(st.st_size >> 20) + " MiB, larger than the " +
+                               std::to_string(kMaxInputFileBytes >> 20) + " MiB an input may be");
+  }
   std::string data;
-  if (S_ISREG(st.st_mode)) data.reserve(static_cast<std::size_t>(st.st_size));
+  data.reserve(static_cast<std::size_t>(st.st_size));
   char buf[1 << 16];
   for (;;) {
     const ssize_t n = ::read(fd, buf, sizeof buf);
@@ -151,6 +162,11 @@ std::string read_file(const std::string& path) {
       throw InputError(path, std::string("cannot read file: ") + std::strerror(err));
     }
     data.append(buf, static_cast<std::size_t>(n));
+    if (data.size() > kMaxInputFileBytes) {  // grew while being read
+      ::close(fd);
+      throw InputError(path, "grew past the " + std::to_string(kMaxInputFileBytes >> 20) +
+                                 " MiB an input may be while it was read");
+    }
   }
   ::close(fd);
   return data;

@@ -25,7 +25,12 @@ std::string ply_bytes(const Mesh& mesh, bool binary);
 /// \throw InputError(texture, ...) when the texture cannot be read or is not PNG/JPEG.
 std::string glb_bytes(const Mesh& mesh, const std::string& texture);
 
-/// Whole file contents. \throw InputError for a missing file, a directory, a read error.
+/// The largest input file read: a 20-million-face mesh (LoadOptions::max_faces) with normals
+/// and UVs is about 3 GB as OBJ text.
+constexpr unsigned long long kMaxInputFileBytes = 4ull << 30;
+
+/// Whole file contents. \throw InputError for a missing file, a directory, a device or pipe,
+/// a file over kMaxInputFileBytes, a read error.
 std::string read_file(const std::string& path);
 
 /// A token made safe for a one-line message: control and non-ASCII bytes escaped as \xNN,

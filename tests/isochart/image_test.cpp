@@ -1,5 +1,6 @@
 #include "isochart/image.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -94,6 +95,11 @@ TEST_CASE("images are told by their first bytes: an empty file says so, a PNG na
   // Cut short, it is still known for a PNG by its first bytes.
   fs::resize_file(dir.file("named.jpg"), fs::file_size(dir.file("named.jpg")) - 12);
   CHECK_THROWS_WITH(read_image(dir.file("named.jpg")), Catch::Contains("cut short"));
+  // A device or a pipe is refused: the image library read /dev/zero without end.
+  fs::create_symlink("/dev/zero", dir.file("zero.png"));
+  CHECK_THROWS_WITH(read_image(dir.file("zero.png")), Catch::Contains("is not a regular file"));
+  REQUIRE(::mkfifo(dir.file("pipe.exr").c_str(), 0600) == 0);
+  CHECK_THROWS_WITH(read_image(dir.file("pipe.exr")), Catch::Contains("is not a regular file"));
 }
 
 TEST_CASE("PNG round trip keeps size, channels and 8-bit values", "[image]") {

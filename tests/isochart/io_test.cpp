@@ -120,6 +120,16 @@ TEST_CASE("file-level problems are InputErrors", "[io]") {
   fs::create_directory(d.file("dir.obj"));
   CHECK_THAT(load_error(d.file("dir.obj")), Catch::Contains("is a directory"));
   CHECK_THAT(load_error(d.write("empty.off", "")), Catch::Contains("file is empty"));
+  // A device or a pipe is refused at once: /dev/zero was read until memory ran out, and
+  // opening a FIFO waited for a writer.
+  fs::create_symlink("/dev/zero", d.file("zero.obj"));
+  CHECK_THAT(load_error(d.file("zero.obj")), Catch::Contains("is not a regular file"));
+  REQUIRE(::mkfifo(d.file("pipe.ply").c_str(), 0600) == 0);
+  CHECK_THAT(load_error(d.file("pipe.ply")), Catch::Contains("is not a regular file"));
+  // Larger than any mesh the loader takes (a sparse file: no disk is used).
+  const std::string huge = d.write("huge.obj", "v 0 0 0\n");
+  fs::resize_file(huge, 5ull << 30);
+  CHECK_THAT(load_error(huge), Catch::Contains("is 5120 MiB, larger than the 4096 MiB an input may be"));
 }
 
 // ---- OBJ -----------------------------------------------------------------------------------
