@@ -145,8 +145,25 @@ int read_file(const char* path, long long max_values, int* width, int* height, i
   in->close();
   // Some readers leave warnings behind even on success; drop them.
   in->geterror();
+  // A NaN or infinite texel (float EXR) would poison every filter and average it meets; it was
+  // once replaced by 0 without a word.
   for (long long i = 0; i < values; ++i)
-    if (!std::isfinite(data[i])) data[i] = 0.0f;
+    if (!std::isfinite(data[i])) {
+      long long bad = 0;
+      for (long long j = i; j < values; ++j) bad += std::isfinite(data[j]) ? 0 : 1;
+      const long long texel = i / spec.nchannels;
+      const int c = static_cast<int>(i % spec.nchannels);
+      const std::string channel = c < static_cast<int>(spec.channelnames.size()) && !spec.channelnames[c].empty()
+                                      ? spec.channelnames[c]
+                                      : "channel " + std::to_string(c);
+      const char* kind = std::isnan(data[i]) ? "NaN" : "infinite";
+      std::free(data);
+      return report(kIsochartsImageInputError,
+                    "pixel (" + std::to_string(texel % spec.width) + "," + std::to_string(texel / spec.width) +
+                        ") " + channel + " is " + kind + " (" +
+                        std::to_string(bad) + " value" + (bad == 1 ? "" : "s") + " not finite)",
+                    message, message_size);
+    }
   std::string joined;
   for (int c = 0; c < spec.nchannels; ++c)
     joined += (c < static_cast<int>(spec.channelnames.size()) ? spec.channelnames[c] : std::string()) + "\n";

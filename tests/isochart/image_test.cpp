@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <string>
 
 #include "isochart/error.h"
@@ -149,6 +150,19 @@ TEST_CASE("EXR round trip keeps float values exactly", "[image]") {
   const std::string stamp("capDate\0string\0", 15);
   const std::size_t at = bytes.find(stamp);
   if (at != std::string::npos) CHECK(bytes.substr(at + stamp.size(), 4) == std::string(4, '\0'));
+}
+
+TEST_CASE("an EXR with a NaN or infinite value is refused, naming the pixel", "[image]") {
+  TempDir dir;
+  Image a(4, 3, 3);
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) a.pixels[i] = 0.25f;
+  a.at(2, 1, 1) = std::numeric_limits<float>::quiet_NaN();
+  a.at(3, 2, 0) = std::numeric_limits<float>::infinity();
+  write_image(dir.file("nan.exr"), a);
+  CHECK_THROWS_WITH(read_image(dir.file("nan.exr")), Catch::Contains("pixel (2,1) G is NaN (2 values not finite)"));
+  a.at(2, 1, 1) = 0.5f;
+  write_image(dir.file("inf.exr"), a);
+  CHECK_THROWS_WITH(read_image(dir.file("inf.exr")), Catch::Contains("pixel (3,2) R is infinite (1 value not finite)"));
 }
 
 TEST_CASE("named channels and attributes reach the file", "[image]") {
