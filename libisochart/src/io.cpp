@@ -53,27 +53,27 @@ void check_face_limit(const std::string& path, long long faces, const LoadOption
                                std::to_string(options.max_faces));
 }
 
+LineScanner::LineScanner(const std::string& path, std::string_view data) : path_(path), data_(data) {
+  if (data_.substr(0, 3) == "\xEF\xBB\xBF") pos_ = 3;
+  find_next_lf();
+}
+
+void LineScanner::find_next_lf() {
+  const void* nl = std::memchr(data_.data() + pos_, '\n', data_.size() - pos_);
+  next_lf_ = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - data_.data()) : data_.size();
+}
+
 bool LineScanner::next(std::string_view& line) {
   if (pos_ >= data_.size()) return false;
   const char* begin = data_.data() + pos_;
   // The next LF is remembered, so that a file of lone CRs is not searched to its end per line.
-  if (!lf_known_ || next_lf_ < pos_) {
-    const void* nl = std::memchr(begin, '\n', data_.size() - pos_);
-    next_lf_ = nl ? static_cast<std::size_t>(static_cast<const char*>(nl) - data_.data()) : data_.size();
-    lf_known_ = true;
-  }
+  if (next_lf_ < pos_) find_next_lf();
   std::size_t len = next_lf_ - pos_;
   std::size_t skip = next_lf_ < data_.size() ? 1 : 0;
-  const void* cr = std::memchr(begin, '\r', len);
-  if (cr) {
+  if (const void* cr = std::memchr(begin, '\r', len)) {
     const std::size_t at = static_cast<std::size_t>(static_cast<const char*>(cr) - begin);
-    if (at + 1 == len && skip) {
-      len = at;  // CR LF
-      skip = 2;
-    } else {
-      len = at;  // a lone CR ends the line
-      skip = 1;
-    }
+    skip = at + 1 == len && skip ? 2 : 1;  // CR LF, or a lone CR ending the line
+    len = at;
   }
   pos_ += len + skip;
   ++line_;

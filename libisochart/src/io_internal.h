@@ -48,9 +48,7 @@ void check_face_limit(const std::string& path, long long faces, const LoadOption
 class LineScanner {
  public:
   /// A UTF-8 byte-order mark at the start is skipped (editors on Windows write one).
-  LineScanner(const std::string& path, std::string_view data) : path_(path), data_(data) {
-    if (data_.substr(0, 3) == "\xEF\xBB\xBF") pos_ = 3;
-  }
+  LineScanner(const std::string& path, std::string_view data);
   /// The next line, or false at the end of the data. Lines end at LF, CR LF or a lone CR
   /// (old Mac files, or a file pasted together from both).
   bool next(std::string_view& line);
@@ -61,11 +59,12 @@ class LineScanner {
   std::size_t offset() const { return pos_; }
 
  private:
+  void find_next_lf();
+
   const std::string& path_;
   std::string_view data_;
   std::size_t pos_ = 0;
-  std::size_t next_lf_ = 0;  // offset of the next '\n' at or after pos_ (size when none), if valid
-  bool lf_known_ = false;
+  std::size_t next_lf_ = 0;  // offset of the next '\n' (size when none); stale when below pos_
   long long line_ = 0;
 };
 
