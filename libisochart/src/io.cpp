@@ -128,7 +128,6 @@ std::string read_file(const std::string& path) {
   // O_NONBLOCK: opening a FIFO would otherwise wait for a writer before it could be refused.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) throw InputError(path, std::string("cannot open file: ") + std::strerror(errno));
-  note_input_file(path);
   struct stat st {};
   if (::fstat(fd, &st) != 0) {
     const int err = errno;
@@ -139,6 +138,7 @@ std::string read_file(const std::string& path) {
     ::close(fd);
     throw InputError(path, "is a directory, not a mesh file");
   }
+  note_input_file(st);
   // A device or pipe (/dev/zero, a FIFO) may never end: it would be read until memory ran out.
   if (!S_ISREG(st.st_mode)) {
     ::close(fd);
@@ -310,11 +310,17 @@ bool same_file(const std::string& a, const std::string& b) {
   return resolved(a) == resolved(b);
 }
 
-void note_input_file(const std::string& path) {
-  struct stat st;
-  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return;
+namespace io_detail {
+void note_input_file(const struct stat& st) {
+  if (!S_ISREG(st.st_mode)) return;
   std::lock_guard<std::mutex> lock(batch_mutex);
   if (batch) batch_inputs.insert({st.st_dev, st.st_ino});
+}
+}  // namespace io_detail
+
+void note_input_file(const std::string& path) {
+  struct stat st;
+  if (::stat(path.c_str(), &st) == 0) io_detail::note_input_file(st);
 }
 
 std::string output_target(const std::string& path) {

@@ -2,6 +2,8 @@
 // Internals of the mesh I/O module: per-format readers and writers, and the small text
 // scanner the text formats share. Not part of the public API.
 
+#include <sys/stat.h>
+
 #include <cstddef>
 #include <string>
 #include <string_view>
@@ -28,6 +30,9 @@ std::string glb_bytes(const Mesh& mesh, const std::string& texture);
 /// The largest input file read: a 20-million-face mesh (LoadOptions::max_faces) with normals
 /// and UVs is about 3 GB as OBJ text.
 constexpr unsigned long long kMaxInputFileBytes = 4ull << 30;
+
+/// note_input_file for a file already opened and fstat'ed.
+void note_input_file(const struct stat& st);
 
 /// Whole file contents. \throw InputError for a missing file, a directory, a device or pipe,
 /// a file over kMaxInputFileBytes, a read error.
