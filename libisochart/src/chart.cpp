@@ -459,7 +459,9 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
     const double x2 = l1 > 0 ? dot(e2, e1 / l1) : 0;
     best.uv.assign(g.num_vertices(), Vec2d{});
     best.uv[t[1]] = {l1, 0};
-    best.uv[t[2]] = {x2, std::sqrt(std::max(squared_norm(e2) - x2 * x2, 0.0))};
+    // The height from the cross product: sqrt(|e2|² − x2²) cancels to 0 on a sliver (height
+    // 1e-10 of its length), which then had no UV area and stopped the packer.
+    best.uv[t[2]] = {x2, l1 > 0 ? norm(cross(e1, e2)) / l1 : 0.0};
     best.method = "triangle";
     evaluate(g, best, o);
     return best;

@@ -88,6 +88,17 @@ TEST_CASE("atlas of an open disk patch is a single chart", "[atlas]") {
   CHECK(a.num_charts() == 1);
 }
 
+TEST_CASE("a sliver triangle (height 1e-10 of its length) gets a chart with area", "[atlas]") {
+  // The lone triangle's height came from sqrt(|e2|² − x2²), which cancels to 0 here: the chart
+  // had no UV area and the packer refused the mesh ("chart 2 has zero UV area").
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0.5, 1e-10, 0}};
+  m.faces = {{0, 4, 3}, {4, 1, 3}, {0, 1, 4}, {0, 3, 2}};
+  AtlasOptions o;
+  const Atlas a = build_atlas(m, o);
+  check_atlas(m, a, o);
+}
+
 TEST_CASE("atlas of a torus cuts its handle", "[atlas]") {
   const Mesh torus = make_builtin("torus");
   AtlasOptions o;
