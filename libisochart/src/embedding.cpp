@@ -68,8 +68,16 @@ void check_reached(const std::vector<int>& ref, const double* row, int from) {
 
 // Top `nev` eigenpairs of the symmetric q × q matrix `b`, descending. Lanczos (Spectra) for
 // larger q, with a dense fallback should it not converge.
-void top_eigenpairs(const Eigen::MatrixXd& b, int nev, Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
-  const int q = static_cast<int>(b.rows());
+void top_eigenpairs(const Eigen::MatrixXd& b_in, int nev, Eigen::VectorXd& values, Eigen::MatrixXd& vectors) {
+  const int q = static_cast<int>(b_in.rows());
+  // Spectra's convergence test has an absolute floor (eps^(2/3), about 4e-11), so on a mesh a
+  // hundred-millionth of a unit across (squared distances near 1e-16) it stopped early and the
+  // charts depended on the mesh's scale. The matrix is brought to a largest entry in [1, 2) by
+  // a power of two, which changes no bit of the arithmetic elsewhere; eigenvalues are scaled
+  // back.
+  const double largest = b_in.cwiseAbs().maxCoeff();
+  const int exponent = largest > 0 && std::isfinite(largest) ? std::ilogb(largest) : 0;
+  const Eigen::MatrixXd b = exponent == 0 ? b_in : Eigen::MatrixXd(b_in * std::ldexp(1.0, -exponent));
   if (q >= kMinLanczosSize && nev < q) {
     Spectra::DenseSymMatProd<double> op(b);
     const int ncv = std::min(q, std::max(2 * nev + 1, 20));
@@ -80,7 +88,7 @@ void top_eigenpairs(const Eigen::MatrixXd& b, int nev, Eigen::VectorXd& values, 
       eigs.init();
       eigs.compute(Spectra::SortRule::LargestAlge, 1000, 1e-12);
       if (eigs.info() == Spectra::CompInfo::Successful) {
-        values = eigs.eigenvalues();
+        values = eigs.eigenvalues() * std::ldexp(1.0, exponent);
         vectors = eigs.eigenvectors();
         return;
       }
@@ -92,7 +100,7 @@ void top_eigenpairs(const Eigen::MatrixXd& b, int nev, Eigen::VectorXd& values, 
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(b);
   if (es.info() != Eigen::Success) throw Error("embedding: the eigen solver failed");
   // Eigen sorts ascending.
-  values = es.eigenvalues().tail(nev).reverse();
+  values = es.eigenvalues().tail(nev).reverse() * std::ldexp(1.0, exponent);
   vectors = es.eigenvectors().rightCols(nev).rowwise().reverse();
 }
 

@@ -213,7 +213,8 @@ void optimize_boundaries(const ChartGeometry& g, const Topology& topo, const Emb
         arcs.push_back(a);
       }
     const double avg_ang = arcs.empty() ? 1 : std::max(sum_ang / arcs.size(), 1e-12);
-    const double avg_dist = arcs.empty() ? 1 : std::max(sum_dist / arcs.size(), 1e-12);
+    // GDD differences are lengths: no absolute floor, or a mesh 1e-12 across loses them.
+    const double avg_dist = sum_dist > 0 ? sum_dist / arcs.size() : 1;
 
     // Nodes: medial faces, then source (A core) and sink (B core).
     std::vector<int> node(nf, -1);

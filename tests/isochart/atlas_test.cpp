@@ -99,6 +99,24 @@ TEST_CASE("a sliver triangle (height 1e-10 of its length) gets a chart with area
   check_atlas(m, a, o);
 }
 
+TEST_CASE("the atlas does not depend on the mesh's scale", "[atlas]") {
+  // Scaling by a power of two changes no bit of a coordinate's mantissa, so every decision
+  // should come out the same. At 2^-40 (a mesh 1e-12 across) the eigen-solver's absolute
+  // convergence floor and the graph cut's floor on distance terms used to change the charts.
+  const Mesh m = make_builtin("torus");
+  AtlasOptions o;
+  const Atlas ref = build_atlas(m, o);
+  for (int e : {-40, -100, 60}) {
+    INFO("scale 2^" << e);
+    Mesh s = m;
+    for (auto& p : s.positions) p = p * std::ldexp(1.0, e);
+    const Atlas a = build_atlas(s, o);
+    CHECK(a.num_charts() == ref.num_charts());
+    CHECK(a.face_chart == ref.face_chart);
+    CHECK(a.stats.l2 == ref.stats.l2);
+  }
+}
+
 TEST_CASE("atlas of a torus cuts its handle", "[atlas]") {
   const Mesh torus = make_builtin("torus");
   AtlasOptions o;
