@@ -106,6 +106,23 @@ double expect_number(std::string_view& rest, const std::string& path, long long 
   return v;
 }
 
+bool float_positions_suffice(const std::vector<Vec3d>& positions, const Vec3d& origin) {
+  if (positions.empty()) return true;
+  Vec3d lo = positions[0], hi = positions[0];
+  for (const Vec3d& p : positions)
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = std::min(lo[i], p[i]);
+      hi[i] = std::max(hi[i], p[i]);
+    }
+  const double tolerance = 1e-7 * norm(hi - lo);
+  for (const Vec3d& p : positions)
+    for (int i = 0; i < 3; ++i) {
+      const double x = p[i] - origin[i];
+      if (std::abs(static_cast<double>(static_cast<float>(x)) - x) > tolerance) return false;
+    }
+  return true;
+}
+
 void append_number(std::string& out, double v) {
   char buf[32];
   const auto r = std::to_chars(buf, buf + sizeof buf, v);

@@ -633,7 +633,19 @@ std::string glb_bytes(const Mesh& m, const std::string& texture) {
   };
 
   std::map<std::string, int> attributes;
-  attributes["POSITION"] = add_vec3([&](int v) { return m.positions[v]; });
+  // glTF positions are floats: a mesh far from the origin is stored around its box's centre,
+  // moved back by the node's translation (a double), instead of losing its shape to rounding.
+  Vec3d origin{};
+  if (!float_positions_suffice(m.positions, origin)) {
+    Vec3d lo = m.positions[0], hi = m.positions[0];
+    for (const Vec3d& p : m.positions)
+      for (int i = 0; i < 3; ++i) {
+        lo[i] = std::min(lo[i], p[i]);
+        hi[i] = std::max(hi[i], p[i]);
+      }
+    origin = (lo + hi) * 0.5;
+  }
+  attributes["POSITION"] = add_vec3([&](int v) { return m.positions[v] - origin; });
   {
     // The spec requires POSITION bounds.
     tinygltf::Accessor& a = model.accessors.back();
@@ -641,7 +653,7 @@ std::string glb_bytes(const Mesh& m, const std::string& texture) {
     a.maxValues.assign(3, verts.empty() ? 0.0 : -1e300);
     for (const auto& vt : verts)
       for (int i = 0; i < 3; ++i) {
-        const double x = static_cast<float>(m.positions[vt.first][i]);
+        const double x = static_cast<float>(m.positions[vt.first][i] - origin[i]);
         a.minValues[i] = std::min(a.minValues[i], x);
         a.maxValues[i] = std::max(a.maxValues[i], x);
       }
@@ -716,6 +728,7 @@ std::string glb_bytes(const Mesh& m, const std::string& texture) {
   model.meshes.push_back(mesh);
   tinygltf::Node node;
   node.mesh = 0;
+  if (origin != Vec3d{}) node.translation = {origin.x, origin.y, origin.z};
   model.nodes.push_back(node);
   tinygltf::Scene scene;
   scene.nodes.push_back(0);

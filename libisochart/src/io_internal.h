@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "isochart/io.h"
 
@@ -30,6 +31,11 @@ std::string glb_bytes(const Mesh& mesh, const std::string& texture);
 /// The largest input file read: a 20-million-face mesh (LoadOptions::max_faces) with normals
 /// and UVs is about 3 GB as OBJ text.
 constexpr unsigned long long kMaxInputFileBytes = 4ull << 30;
+
+/// True when storing `positions − origin` as 32-bit floats moves no coordinate by more than
+/// 1e-7 of the positions' bounding-box diagonal (a mesh near the origin always passes; one
+/// a thousand diagonals away does not).
+bool float_positions_suffice(const std::vector<Vec3d>& positions, const Vec3d& origin);
 
 /// note_input_file for a file already opened and fstat'ed.
 void note_input_file(const struct stat& st);

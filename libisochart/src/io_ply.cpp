@@ -442,7 +442,11 @@ std::string ply_bytes(const Mesh& m, bool binary) {
   std::string out = "ply\nformat ";
   out += binary ? "binary_little_endian 1.0\n" : "ascii 1.0\n";
   out += "comment isocharts\nelement vertex " + std::to_string(m.num_vertices()) + "\n";
-  out += "property float x\nproperty float y\nproperty float z\n";
+  // Doubles when floats would move the mesh (far from the origin: at 1e9 every vertex of a
+  // unit-sized mesh fell on one point).
+  const bool wide = !float_positions_suffice(m.positions, Vec3d{});
+  out += wide ? "property double x\nproperty double y\nproperty double z\n"
+              : "property float x\nproperty float y\nproperty float z\n";
   if (m.has_normals()) out += "property float nx\nproperty float ny\nproperty float nz\n";
   if (m.has_colors()) out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
   out += "element face " + std::to_string(m.num_faces()) + "\n";
@@ -469,13 +473,23 @@ std::string ply_bytes(const Mesh& m, bool binary) {
       append_number(out, f);
     }
   };
+  auto put_position = [&](double v) {
+    if (!wide) return put_float(v);
+    if (binary) {
+      std::uint64_t bits;
+      std::memcpy(&bits, &v, 8);
+      for (int i = 0; i < 8; ++i) out += static_cast<char>((bits >> (8 * i)) & 0xff);
+    } else {
+      append_number(out, v);
+    }
+  };
   auto sep = [&](char c) {
     if (!binary) out += c;
   };
   for (int v = 0; v < m.num_vertices(); ++v) {
     for (int i = 0; i < 3; ++i) {
       if (i) sep(' ');
-      put_float(m.positions[v][i]);
+      put_position(m.positions[v][i]);
     }
     if (m.has_normals())
       for (int i = 0; i < 3; ++i) {

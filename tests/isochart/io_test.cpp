@@ -622,6 +622,39 @@ TEST_CASE("PLY round trips, binary and ASCII", "[io]") {
   }
 }
 
+TEST_CASE("PLY and glb keep a mesh far from the origin in shape", "[io]") {
+  // Float positions a billion units out are 64 units apart: every vertex of the cube fell on
+  // one point. PLY switches to doubles, glb stores positions around a translated node.
+  TempDir d;
+  Mesh far = attributed_cube();
+  const Vec3d offset{1e9, -3e9, 2e9};
+  for (auto& p : far.positions) p += offset;
+  SaveOptions ascii;
+  ascii.binary_ply = false;
+  save_mesh(far, d.file("far.ply"));
+  save_mesh(far, d.file("far_ascii.ply"), ascii);
+  save_mesh(far, d.file("far.glb"));
+  CHECK(read_bytes(d.file("far.ply")).find("property double x") != std::string::npos);
+  for (const char* name : {"far.ply", "far_ascii.ply", "far.glb"}) {
+    INFO(name);
+    const LoadResult r = load_mesh(d.file(name));
+    REQUIRE(r.mesh.num_faces() == far.num_faces());
+    std::vector<Vec3d> got = r.mesh.positions, want = far.positions;
+    auto less = [](const Vec3d& a, const Vec3d& b) {
+      return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+    };
+    std::sort(got.begin(), got.end(), less);
+    std::sort(want.begin(), want.end(), less);
+    REQUIRE(got.size() == want.size());
+    for (std::size_t i = 0; i < got.size(); ++i) CHECK(norm(got[i] - want[i]) < 1e-6);
+  }
+  // Near the origin positions stay floats (and the glb has no translation).
+  save_mesh(attributed_cube(), d.file("near.ply"));
+  save_mesh(attributed_cube(), d.file("near.glb"));
+  CHECK(read_bytes(d.file("near.ply")).find("property float x") != std::string::npos);
+  CHECK(read_bytes(d.file("near.glb")).find("translation") == std::string::npos);
+}
+
 TEST_CASE("glb round trip, deterministic bytes", "[io]") {
   TempDir d;
   const Mesh m = attributed_cube();
