@@ -166,6 +166,24 @@ TEST_CASE("sample optimization brings the remesh closer to the surface", "[mcgim
   }
 }
 
+TEST_CASE("the sample fit does not depend on where the mesh lies", "[mcgim]") {
+  // The fit's solvers stop at a residual relative to their right-hand side: a billion units from
+  // the origin they stopped a tenth of the mesh's size away from the solution.
+  const isochart::Mesh m = mcgim_test::sphere_atlas(32, 64);
+  isochart::Mesh far = m;
+  const Vec3d offset{1e9, -2e9, 5e8};
+  for (auto& p : far.positions) p += offset;
+  DistanceOptions d;
+  d.samples = 50000;
+  const Level near_level = build_level(m, keep_layout(64)), far_level = build_level(far, keep_layout(64));
+  isochart::Mesh back = far_level.remesh.mesh;
+  for (auto& p : back.positions) p -= offset;
+  const double near_psnr = measure_distance(m, near_level.remesh.mesh, d).psnr;
+  const double far_psnr = measure_distance(m, back, d).psnr;
+  INFO(near_psnr << " dB at the origin, " << far_psnr << " dB 1e9 away");
+  CHECK(far_psnr == Approx(near_psnr).margin(0.1));
+}
+
 TEST_CASE("the closest-point fit pulls along the normal and turns no triangle over", "[mcgim]") {
   // A faceted sphere: the grid crosses its creases at every angle, so the fit has work to do.
   const isochart::Mesh m = mcgim_test::sphere_atlas(8, 14);
