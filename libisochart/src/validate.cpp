@@ -23,6 +23,18 @@ namespace isochart {
 
 namespace {
 
+// A triangle whose height is below 1e-15 of its longest side is flat to double precision: no
+// layout can keep its shape once packed (its UVs a few ulps apart near 0.5), and the atlas
+// flipped such slivers. Treated like an exactly collinear triangle.
+bool too_thin(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const double longest = std::max({squared_norm(b - a), squared_norm(c - b), squared_norm(a - c)});
+  return norm(cross(b - a, c - a)) < 1e-15 * longest;
+}
+
+}  // namespace
+
+namespace {
+
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 
 std::string text(double x) {
@@ -298,6 +310,16 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
       std::snprintf(buf, sizeof buf, "%.3g", extent);
       fail(std::string("the mesh is too small to process (largest extent ") + buf + "); scale it up");
     }
+    // Doubles carry 52 bits: a mesh 1e-14 across at 1 from the origin (or 1e-6 at 1e9) has its
+    // vertices on a grid of a few dozen steps, its triangles cannot keep their shapes, and
+    // the atlas missed its bounds. Below 2^20 steps across, refuse rather than mislead.
+    const double far = std::max({std::abs(lo.x), std::abs(lo.y), std::abs(lo.z), std::abs(hi.x), std::abs(hi.y),
+                                 std::abs(hi.z)});
+    if (nv > 0 && extent > 0 && extent < std::ldexp(far, -32)) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "the mesh is %.3g across but %.3g from the origin", extent, far);
+      fail(std::string(buf) + ": its coordinates are too coarse for its size; move it nearer the origin");
+    }
   }
   for (std::size_t t = 0; t < raw.uvs.size(); ++t)
     if (!is_finite(raw.uvs[t]))
@@ -357,7 +379,8 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
       const Face v = {poly[t[0]], poly[t[1]], poly[t[2]]};
       const bool repeated = v[0] == v[1] || v[1] == v[2] || v[0] == v[2];
       if (repeated || CGAL::collinear(point(raw.positions[v[0]]), point(raw.positions[v[1]]),
-                                      point(raw.positions[v[2]]))) {
+                                      point(raw.positions[v[2]])) ||
+          too_thin(raw.positions[v[0]], raw.positions[v[1]], raw.positions[v[2]])) {
         ++report.degenerate_faces;
         if (!repair)
           need_repair("face " + std::to_string(f) + " is degenerate (" +

@@ -115,6 +115,15 @@ TEST_CASE("unrecoverable input is an InputError naming the element", "[validate]
   RawMesh tiny = tetrahedron();
   for (auto& p : tiny.positions) p = p * 1e-300;
   CHECK_THAT(error_of(tiny, true), Catch::Contains("too small"));
+  // A mesh whose coordinates cannot resolve its shape: 1e-14 across, 1 from the origin (its
+  // vertices on a grid of about 50 steps). 1e-6 across at 1 is fine.
+  RawMesh coarse = tetrahedron();
+  for (auto& p : coarse.positions) p = p * 1e-14 + Vec3d{1, 0, 0};
+  CHECK_THAT(error_of(coarse, true), Catch::Contains("from the origin") && Catch::Contains("too coarse"));
+  RawMesh offset = tetrahedron();
+  for (auto& p : offset.positions) p = p * 1e-6 + Vec3d{1, 0, 0};
+  ValidationReport offset_report;
+  CHECK(validate(offset, offset_report).num_faces() == 4);
   RawMesh small = tetrahedron();  // a micrometre-sized part in metres is fine
   for (auto& p : small.positions) p = p * 1e-6;
   ValidationReport rep;
@@ -200,8 +209,14 @@ TEST_CASE("degenerate faces are found exactly and removed", "[validate]") {
   CHECK(rep.degenerate_faces == 1);
   CHECK(m.num_faces() == 1);
   CHECK_THAT(error_of(line, false), Catch::Contains("face 0 is degenerate (zero area)"));
-  // Nearly collinear but not exactly: kept.
-  RawMesh thin = raw_of({{0, 0, 0}, {1, 0, 0}, {2, 1e-300, 0}}, {{0, 1, 2}});
+  // Flat to double precision (height below 1e-15 of the longest side; no packed layout can
+  // keep its shape): degenerate too. A sliver 1e-10 high is a triangle.
+  RawMesh flat = raw_of({{0, 0, 0}, {1, 0, 0}, {2, 1e-300, 0}, {0, 0, 1}}, {{0, 1, 2}, {1, 0, 3}});
+  m = validate(flat, rep);
+  CHECK(rep.degenerate_faces == 1);
+  CHECK(m.num_faces() == 1);
+  CHECK_THAT(error_of(flat, false), Catch::Contains("face 0 is degenerate (zero area)"));
+  RawMesh thin = raw_of({{0, 0, 0}, {1, 0, 0}, {0.5, 1e-10, 0}}, {{0, 1, 2}});
   m = validate(thin, rep);
   CHECK(rep.degenerate_faces == 0);
   CHECK(m.num_faces() == 1);
