@@ -95,6 +95,16 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     isochart::write_image(a.png, isochart::render_uv_layout(out_mesh, pw, ph, aspect));
   }
   const auto& s = atlas.stats;
+  // Every chart is accepted only within the bounds; the whole can still miss them where the
+  // numbers cannot hold a triangle's shape (a sliver 1e-16 of its length high). Say so.
+  const bool bounds_met = s.l2 <= a.options.max_l2 * (1 + 1e-9) && s.linf <= a.options.max_linf * (1 + 1e-9) &&
+                          s.flipped == 0 && s.overlapping_pairs == 0;
+  if (!bounds_met && a.signal.empty()) {
+    std::ostringstream w;
+    w << "the atlas misses its bounds (L2 " << s.l2 << ", Linf " << s.linf << ", " << s.flipped << " flipped, "
+      << s.overlapping_pairs << " overlapping pairs): some triangles are too thin for the coordinates' precision";
+    ctx.warn(a.input, w.str());
+  }
 
   nlohmann::json j;
   j["file"] = a.input;
@@ -108,6 +118,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   j["packing_ratio"] = s.packing_ratio;
   j["flipped"] = s.flipped;
   j["overlapping_pairs"] = s.overlapping_pairs;
+  j["bounds_met"] = bounds_met;
   j["splits"] = s.splits;
   j["seed"] = s.seed;
   j["options"] = {{"max_l2", a.options.max_l2},     {"max_linf", a.options.max_linf},
