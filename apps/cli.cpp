@@ -1,10 +1,12 @@
 #include "cli.h"
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 
 #include "isochart/error.h"
@@ -34,6 +36,15 @@ void Context::check_paths(const std::vector<std::string>& inputs, std::vector<st
     for (std::size_t j = 0; j < k; ++j)
       if (real(outputs[j]) && isochart::same_file(outputs[j], out))
         throw isochart::InputError(out, "cannot write: given as two outputs of this run");
+    // A missing or read-only directory is found by the writers only after all the work.
+    const auto slash = out.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? "." : slash == 0 ? "/" : out.substr(0, slash);
+    struct stat st;
+    if (::stat(dir.c_str(), &st) != 0)
+      throw isochart::InputError(out, "cannot write: directory " + dir + " does not exist");
+    if (!S_ISDIR(st.st_mode)) throw isochart::InputError(out, "cannot write: " + dir + " is not a directory");
+    if (::access(dir.c_str(), W_OK) != 0)
+      throw isochart::InputError(out, "cannot write: " + std::string(std::strerror(errno)));
   }
 }
 

@@ -214,14 +214,14 @@ void write_image(const std::string& path, const Image& image) {
     std::string detail = message;
     for (std::size_t at; (at = detail.find(tmp.string())) != std::string::npos;)
       detail.replace(at, tmp.string().size(), path);
-    throw Error(detail.empty() ? "cannot write image " + path : "cannot write image " + path + " (" + detail + ")");
+    throw Error(path + ": cannot write" + (detail.empty() ? std::string() : ": " + detail));
   }
   if (OutputBatch::stage(tmp.string(), target.string())) return;
   fs::rename(tmp, target, ec);
   if (ec) {
     const std::string reason = ec.message();
     fs::remove(tmp, ec);
-    throw Error("cannot write image " + path + " (" + reason + ")");
+    throw Error(path + ": cannot write: " + reason);
   }
 }
 

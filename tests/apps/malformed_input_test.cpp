@@ -377,6 +377,14 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --res: expected an integer from 2 to 2048, got '12x'\n"));
   CHECK(run_cli(atlas + " --png-size 5", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --png-size: expected an integer from 16 to 2896, got '5'\n"));
+  // An output in a directory that does not exist is refused before the work, not after it.
+  const std::string nodir = (tmp.path / "no_such_dir").string();
+  CHECK(run_cli("atlas builtin:sphere -o '" + nodir + "/a.obj'", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: " + nodir + "/a.obj: cannot write: directory " + nodir +
+                                   " does not exist\n"));
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --report '" + nodir + "/r.json'",
+                err) == 2);
+  CHECK_THAT(line(), Catch::Contains("r.json: cannot write: directory"));
   CHECK(run_cli("stats builtin:sphere --aspect 0", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect: expected a number from 0.000061 to 16384, got '0'\n"));
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --width 4096 --height 4096", err) ==
@@ -426,7 +434,7 @@ TEST_CASE("a write that fails midway (file size limit, as on a full disk) is one
     REQUIRE(WIFEXITED(status));
     CHECK(WEXITSTATUS(status) == 1);
     const std::string line = read_bytes(err);
-    CHECK_THAT(line, Catch::StartsWith("isocharts: error: cannot write image " + out.string() + " ("));
+    CHECK_THAT(line, Catch::StartsWith("isocharts: error: " + out.string() + ": cannot write: "));
     CHECK(std::count(line.begin(), line.end(), '\n') == 1);
     CHECK(line.find(".tmp") == std::string::npos);  // the temporary file is ours, not the user's
     CHECK(entries(outdir).empty());
