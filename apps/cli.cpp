@@ -78,8 +78,12 @@ isochart::Progress Context::progress() const {
                    isochart::stage_name(stage), 100.0 * fraction);
       std::fflush(stderr);
       state->shown = true;
-    } else if (s != state->last_stage) {
-      // Not a terminal: one line per stage keeps logs readable.
+    } else {
+      // Not a terminal: a line when the stage changes, at most one every five seconds (a bench
+      // run alternates stages hundreds of times and filled logs with them).
+      if (s == state->last_stage || (state->last_print != clock::time_point{} &&
+                                     now - state->last_print < std::chrono::seconds(5)))
+        return true;
       std::fprintf(stderr, "[%6.1fs] %s\n", std::chrono::duration<double>(now - state->start).count(),
                    isochart::stage_name(stage));
     }
