@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -474,4 +475,30 @@ TEST_CASE("a PNG cut short gets our one-line error instead of libpng's", "[cli]"
   write_bytes(padded, whole + std::string(100, '\0'));
   CHECK(run_cli("render '" + tri.string() + "' --texture '" + padded.string() + "' -o '" + (tmp.path / "w.png").string() + "'",
                 err) == 0);
+}
+
+TEST_CASE("remesh --atlas warns about an atlas whose charts overlap in UV", "[cli]") {
+  TempDir tmp("overlap_atlas");
+  const fs::path err = tmp.path / "err.txt", atlas = tmp.path / "a.obj", tiled = tmp.path / "tiled.obj";
+  REQUIRE(run_cli("-q atlas builtin:sphere -o '" + atlas.string() + "'", err) == 0);
+  // The same layout tiled three times over in each direction: charts land on themselves.
+  std::istringstream in(read_bytes(atlas));
+  std::ostringstream out;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("vt ", 0) == 0) {
+      std::istringstream v(line.substr(3));
+      double u = 0, w = 0;
+      v >> u >> w;
+      out << "vt " << std::fmod(3 * u, 1.0) << " " << std::fmod(3 * w, 1.0) << "\n";
+    } else {
+      out << line << "\n";
+    }
+  }
+  write_bytes(tiled, out.str());
+  const std::string remesh = "remesh builtin:sphere --res 32 -o '" + (tmp.path / "r.ply").string() + "' --no-psnr";
+  REQUIRE(run_cli(remesh + " --atlas '" + atlas.string() + "'", err) == 0);
+  CHECK(read_bytes(err).find("overlapping") == std::string::npos);
+  REQUIRE(run_cli(remesh + " --atlas '" + tiled.string() + "'", err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains("isocharts: warning: " + tiled.string() + ": the atlas has ") &&
+                                  Catch::Contains("overlapping triangle pairs in UV"));
 }
