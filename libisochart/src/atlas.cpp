@@ -474,9 +474,13 @@ class Builder {
       queue.erase(std::remove_if(queue.begin(), queue.end(), [](const auto& q) { return q->state.load() >= 2; }),
                   queue.end());
     };
+    // Counted over the queue (pruned every round), not over `ahead`, which keeps every
+    // finished attempt nobody asked for yet: with thousands of charts that map grew to
+    // thousands of entries, walked for every attempt started (most of a run whose bounds
+    // split a sphere into its 5,120 triangles). Which attempts run ahead changes no result.
     auto in_flight = [&] {
       int n = 0;
-      for (const auto& [k, slot] : ahead) n += slot->state.load() < 2 ? 1 : 0;
+      for (const auto& slot : queue) n += slot->state.load() < 2 ? 1 : 0;
       return n;
     };
     // The outcome of merging a into b: kept, computed ahead, or computed here.
