@@ -6,7 +6,7 @@
 //   pack_bench [options] [atlas.obj ...]     (default: all six baseline atlases)
 //     --size N | --width N --height N   target texture (1024×1024)
 //     --gutter N      gutter in texels (2)
-//     --rotations N   orientations per chart (16)
+//     --rotations N   orientations per chart (default 0: automatic, 16; 4 above 256 charts)
 //     --no-holes      disable hole filling
 //     --variants N    greedy variants per scale (0 = automatic)
 //     --growth W      growth weight of side insertions (0.5)

@@ -42,6 +42,9 @@ constexpr int kLadderRungs = 5;
 constexpr double kLadderStep = 0.01;
 // Greedy variants at most (PackOptions::variants).
 constexpr int kMaxVariants = 32;
+// Above this many charts, this many rotations per chart (16 below; PackOptions::rotations = 0).
+constexpr int kManyCharts = 256;
+constexpr int kManyChartsRotations = 4;
 
 // A chart in the packer's own frame: centred, scaled so its UV area equals its 3-D area.
 struct Prepared {
@@ -340,8 +343,8 @@ void validate(const PackOptions& o) {
   if (o.width - 2 * o.gutter < 1 || o.height - 2 * o.gutter < 1)
     bad("pack: a gutter of " + std::to_string(o.gutter) + " texels leaves no room in a " +
         std::to_string(o.width) + "x" + std::to_string(o.height) + " texture");
-  if (o.rotations < 1 || o.rotations > 360)
-    bad("pack: rotations " + std::to_string(o.rotations) + " is outside 1..360");
+  if (o.rotations < 0 || o.rotations > 360)
+    bad("pack: rotations " + std::to_string(o.rotations) + " is outside 0..360");
   if (!(o.growth_weight >= 0) || !std::isfinite(o.growth_weight))
     bad("pack: growth_weight " + std::to_string(o.growth_weight) + " must be finite and >= 0");
   if (o.variants < 0) bad("pack: variants " + std::to_string(o.variants) + " is negative");
@@ -359,7 +362,11 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
   report(progress, Stage::Packing, 0);
 
   const int n = static_cast<int>(charts.size());
-  const int rotations = options.rotations, g = options.gutter;
+  // Every chart's hole search walks the whole packing, once per rotation: with many charts
+  // (many components, or tight bounds) that is most of a run, and small charts lose little
+  // with four orientations of their minimal rectangle.
+  const int rotations = options.rotations > 0 ? options.rotations : n > kManyCharts ? kManyChartsRotations : 16;
+  const int g = options.gutter;
   const int limit_w = options.width - 2 * g, limit_h = options.height - 2 * g;
   std::vector<Prepared> prepared(n);
   for (int i = 0; i < n; ++i) prepared[i] = prepare(charts[i], i);

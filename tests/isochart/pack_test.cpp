@@ -346,6 +346,37 @@ TEST_CASE("many tiny charts pack densely", "[pack][slow]") {
   CHECK(r.packing_ratio >= 0.5);
 }
 
+TEST_CASE("automatic rotations: 16, and 4 above 256 charts", "[pack]") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0, 1);
+  auto triangles = [&](int count) {
+    std::vector<PackChart> out;
+    for (int i = 0; i < count; ++i) {
+      PackChart c;
+      c.uv = {{0, 0}, {0.5 + u(rng), 0.3 * u(rng)}, {u(rng), 0.4 + u(rng)}};
+      c.faces = {{0, 1, 2}};
+      if (signed_area(c.uv[0], c.uv[1], c.uv[2]) < 0) std::swap(c.faces[0][1], c.faces[0][2]);
+      c.area_3d = uv_area(c);
+      out.push_back(c);
+    }
+    return out;
+  };
+  // The automatic packing is the fixed one's, placement for placement, and a valid packing.
+  auto same = [](int rotations, const std::vector<PackChart>& input) {
+    std::vector<PackChart> a = input, b = input;
+    PackOptions automatic, fixed;
+    fixed.rotations = rotations;
+    const PackResult ra = pack_charts(a, automatic), rb = pack_charts(b, fixed);
+    check_packing(input, a, automatic, ra);
+    bool equal = ra.placements.size() == rb.placements.size();
+    for (std::size_t i = 0; equal && i < ra.placements.size(); ++i)
+      equal = ra.placements[i].angle == rb.placements[i].angle && ra.placements[i].offset == rb.placements[i].offset;
+    return equal;
+  };
+  CHECK(same(16, triangles(40)));
+  CHECK(same(4, triangles(300)));
+}
+
 TEST_CASE("charts of a real atlas pack tighter than UVAtlas packed them", "[pack]") {
   const std::string path = std::string(ISOCHARTS_SHARED_DATA) + "/baseline_atlases/bunny_uvatlas.obj";
   const std::vector<PackChart> input = atlas_charts(load_mesh(path).mesh);
@@ -451,7 +482,7 @@ TEST_CASE("bad charts and options are reported by name", "[pack]") {
   o.gutter = 2;
   CHECK_THAT(message({good}, o), Catch::Contains("leaves no room"));
   o = {};
-  o.rotations = 0;
+  o.rotations = -1;
   CHECK_THAT(message({good}, o), Catch::Contains("rotations"));
   o = {};
   o.growth_weight = -1;

@@ -37,7 +37,10 @@ struct PackOptions {
   int gutter = 2;
   /// Orientations tried per chart, evenly spaced over 360° starting from the chart's
   /// minimal-area bounding rectangle (16 in the paper). Rotations only, never mirroring.
-  int rotations = 16;
+  /// 0 = automatic: 16, and 4 for more than 256 charts, where every chart's hole search in
+  /// every rotation was most of the run (1,000 random triangles: 28 s → 11 s, packing ratio
+  /// 0.612 → 0.606).
+  int rotations = 0;
   /// Extension beyond §6: before introducing a chart from one of the four sides (which
   /// grows the packing), look for a place inside the current bounding box where it fits
   /// (a hole left by earlier charts, or the open space above a horizon), touching as much
