@@ -173,6 +173,7 @@ struct Shared {
   std::vector<Vec3d> corner_normal;
   std::vector<Vec3d> face_color;  // Shaded / Charts
   Wrap texture_wrap = Wrap::Repeat;
+  int texture_alpha = -1;  // the texture's alpha channel, if it has one
   Vec3d centre;
   double radius;
   std::vector<char> referenced;
@@ -286,6 +287,12 @@ void render_view(const Shared& s, int view, int x0, int tile_w, Image& out) {
       const Vec2d q = mesh.uvs[uv[0]] * m[0] + mesh.uvs[uv[1]] * m[1] + mesh.uvs[uv[2]] * m[2];
       sample_bilinear(*tex, q.x, q.y, texel, s.texture_wrap);
       base = tex->channels >= 3 ? Vec3d{texel[0], texel[1], texel[2]} : Vec3d{texel[0], texel[0], texel[0]};
+      // A texture with alpha (RGBA, or grey and alpha) lies over the plain grey surface, as in
+      // a viewer's blend, instead of showing the colour of its transparent texels.
+      if (s.texture_alpha >= 0) {
+        const double alpha = std::clamp<double>(texel[s.texture_alpha], 0.0, 1.0);
+        base = base * alpha + kGrey * (1 - alpha);
+      }
     } else {
       base = s.face_color[f];
     }
@@ -475,6 +482,14 @@ Image render_mesh(const Mesh& mesh, const RenderOptions& options) {
         bool unit = true;
         for (const Vec2d& uv : mesh.uvs) unit = unit && uv.x >= 0 && uv.x <= 1 && uv.y >= 0 && uv.y <= 1;
         s.texture_wrap = unit ? Wrap::Clamp : Wrap::Repeat;
+      }
+      {
+        const Image& t = *o.texture;
+        const auto named = std::find(t.channel_names.begin(), t.channel_names.end(), "A");
+        if (static_cast<int>(t.channel_names.size()) == t.channels && named != t.channel_names.end())
+          s.texture_alpha = static_cast<int>(named - t.channel_names.begin());
+        else if (t.channels == 4 || t.channels == 2)
+          s.texture_alpha = t.channels - 1;
       }
       break;
   }

@@ -199,6 +199,27 @@ TEST_CASE("textured render shows both colours of a checkerboard", "[render]") {
   CHECK(count_pixels(render_mesh(quad, o), 0.2f) == 0);
 }
 
+TEST_CASE("a transparent texture shows the plain surface beneath it", "[render]") {
+  // Black texels with alpha 0 used to render black: the alpha channel was ignored.
+  const Mesh quad = textured_quad();
+  Image tex(8, 8, 4, 0.0f);  // RGBA, black and fully transparent
+  RenderOptions o;
+  o.width = o.height = 96;
+  o.color = ColorMode::Textured;
+  o.texture = &tex;
+  const Image clear = render_mesh(quad, o);
+  o.color = ColorMode::Shaded;
+  const Image plain = render_mesh(quad, o);
+  CHECK(clear.pixels == plain.pixels);
+  // Opaque black is black; grey with alpha (two channels) follows the same rule.
+  for (int i = 3; i < static_cast<int>(tex.pixels.size()); i += 4) tex.pixels[i] = 1.0f;
+  o.color = ColorMode::Textured;
+  CHECK(count_pixels(render_mesh(quad, o), 0.2f) > 1000);
+  Image grey(8, 8, 2, 0.0f);
+  o.texture = &grey;
+  CHECK(render_mesh(quad, o).pixels == plain.pixels);
+}
+
 TEST_CASE("textured interpolation is perspective-correct", "[render]") {
   // A long strip on the ground (y = 0) receding from the front camera, which looks 15° down:
   // the near end (z = 4) is at the bottom of the image, the far end (z = -4) at the top.
