@@ -106,15 +106,8 @@ double expect_number(std::string_view& rest, const std::string& path, long long 
   return v;
 }
 
-bool float_positions_suffice(const std::vector<Vec3d>& positions, const Vec3d& origin) {
-  if (positions.empty()) return true;
-  Vec3d lo = positions[0], hi = positions[0];
-  for (const Vec3d& p : positions)
-    for (int i = 0; i < 3; ++i) {
-      lo[i] = std::min(lo[i], p[i]);
-      hi[i] = std::max(hi[i], p[i]);
-    }
-  const double tolerance = 1e-7 * norm(hi - lo);
+bool float_positions_suffice(const std::vector<Vec3d>& positions, const Vec3d& origin, double diagonal) {
+  const double tolerance = 1e-7 * diagonal;
   for (const Vec3d& p : positions)
     for (int i = 0; i < 3; ++i) {
       const double x = p[i] - origin[i];

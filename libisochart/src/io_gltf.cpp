@@ -635,16 +635,9 @@ std::string glb_bytes(const Mesh& m, const std::string& texture) {
   std::map<std::string, int> attributes;
   // glTF positions are floats: a mesh far from the origin is stored around its box's centre,
   // moved back by the node's translation (a double), instead of losing its shape to rounding.
-  Vec3d origin{};
-  if (!float_positions_suffice(m.positions, origin)) {
-    Vec3d lo = m.positions[0], hi = m.positions[0];
-    for (const Vec3d& p : m.positions)
-      for (int i = 0; i < 3; ++i) {
-        lo[i] = std::min(lo[i], p[i]);
-        hi[i] = std::max(hi[i], p[i]);
-      }
-    origin = (lo + hi) * 0.5;
-  }
+  const BoundingBox box = bounding_box(m);
+  const Vec3d origin =
+      float_positions_suffice(m.positions, Vec3d{}, box.diagonal()) ? Vec3d{} : (box.min + box.max) * 0.5;
   attributes["POSITION"] = add_vec3([&](int v) { return m.positions[v] - origin; });
   {
     // The spec requires POSITION bounds.

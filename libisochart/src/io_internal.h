@@ -33,9 +33,9 @@ std::string glb_bytes(const Mesh& mesh, const std::string& texture);
 constexpr unsigned long long kMaxInputFileBytes = 4ull << 30;
 
 /// True when storing `positions − origin` as 32-bit floats moves no coordinate by more than
-/// 1e-7 of the positions' bounding-box diagonal (a mesh near the origin always passes; one
-/// a thousand diagonals away does not).
-bool float_positions_suffice(const std::vector<Vec3d>& positions, const Vec3d& origin);
+/// 1e-7 of `diagonal`, the positions' bounding-box diagonal (a mesh near the origin always
+/// passes; one a thousand diagonals away does not).
+bool float_positions_suffice(const std::vector<Vec3d>& positions, const Vec3d& origin, double diagonal);
 
 /// note_input_file for a file already opened and fstat'ed.
 void note_input_file(const struct stat& st);

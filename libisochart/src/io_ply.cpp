@@ -444,7 +444,7 @@ std::string ply_bytes(const Mesh& m, bool binary) {
   out += "comment isocharts\nelement vertex " + std::to_string(m.num_vertices()) + "\n";
   // Doubles when floats would move the mesh (far from the origin: at 1e9 every vertex of a
   // unit-sized mesh fell on one point).
-  const bool wide = !float_positions_suffice(m.positions, Vec3d{});
+  const bool wide = !float_positions_suffice(m.positions, Vec3d{}, bounding_box(m).diagonal());
   out += wide ? "property double x\nproperty double y\nproperty double z\n"
               : "property float x\nproperty float y\nproperty float z\n";
   if (m.has_normals()) out += "property float nx\nproperty float ny\nproperty float nz\n";

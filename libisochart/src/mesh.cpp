@@ -307,11 +307,13 @@ double surface_area(const Mesh& m) {
   return s;
 }
 
-BoundingBox bounding_box(const Mesh& m) {
+BoundingBox bounding_box(const Mesh& m) { return bounding_box(m.positions); }
+
+BoundingBox bounding_box(const std::vector<Vec3d>& points) {
   BoundingBox b;
-  if (m.positions.empty()) return b;
-  b.min = b.max = m.positions[0];
-  for (const auto& p : m.positions)
+  if (points.empty()) return b;
+  b.min = b.max = points[0];
+  for (const auto& p : points)
     for (int i = 0; i < 3; ++i) {
       b.min[i] = std::min(b.min[i], p[i]);
       b.max[i] = std::max(b.max[i], p[i]);

@@ -208,18 +208,12 @@ void write_back(const std::vector<Vec3d>& pos, GeometryImage& im, Remesh& r) {
 // anchors' centre rounded to a multiple of a power of two at least 64 box diagonals, which is
 // the origin itself for any mesh lying within 32 diagonals of it (figures there unchanged).
 Vec3d solve_origin(const std::vector<Vec3d>& anchor) {
-  if (anchor.empty()) return {};
-  Vec3d lo = anchor[0], hi = anchor[0];
-  for (const Vec3d& a : anchor)
-    for (int i = 0; i < 3; ++i) {
-      lo[i] = std::min(lo[i], a[i]);
-      hi[i] = std::max(hi[i], a[i]);
-    }
-  const double diagonal = norm(hi - lo);
+  const isochart::BoundingBox box = isochart::bounding_box(anchor);
+  const double diagonal = box.diagonal();
   if (!(diagonal > 0) || !std::isfinite(diagonal)) return {};
   const double grid = std::ldexp(1.0, std::ilogb(64 * diagonal) + 1);
   Vec3d o;
-  for (int i = 0; i < 3; ++i) o[i] = grid * std::round((lo[i] + hi[i]) / 2 / grid);
+  for (int i = 0; i < 3; ++i) o[i] = grid * std::round((box.min[i] + box.max[i]) / 2 / grid);
   return o;
 }
 

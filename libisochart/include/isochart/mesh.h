@@ -152,6 +152,7 @@ struct BoundingBox {
   double diagonal() const { return norm(max - min); }
 };
 BoundingBox bounding_box(const Mesh& m);
+BoundingBox bounding_box(const std::vector<Vec3d>& points);
 
 /// Mean length over the mesh's unique edges.
 double mean_edge_length(const Mesh& m, const Topology& t);
