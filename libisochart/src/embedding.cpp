@@ -77,7 +77,9 @@ void top_eigenpairs(const Eigen::MatrixXd& b_in, int nev, Eigen::VectorXd& value
   // back.
   const double largest = b_in.cwiseAbs().maxCoeff();
   const int exponent = largest > 0 && std::isfinite(largest) ? std::ilogb(largest) : 0;
-  const Eigen::MatrixXd b = exponent == 0 ? b_in : Eigen::MatrixXd(b_in * std::ldexp(1.0, -exponent));
+  Eigen::MatrixXd scaled;
+  if (exponent != 0) scaled = b_in * std::ldexp(1.0, -exponent);
+  const Eigen::MatrixXd& b = exponent != 0 ? scaled : b_in;
   if (q >= kMinLanczosSize && nev < q) {
     Spectra::DenseSymMatProd<double> op(b);
     const int ncv = std::min(q, std::max(2 * nev + 1, 20));

@@ -31,10 +31,6 @@ bool too_thin(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   return norm(cross(b - a, c - a)) < 1e-15 * longest;
 }
 
-}  // namespace
-
-namespace {
-
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 
 std::string text(double x) {
