@@ -185,16 +185,10 @@ void write_image(const std::string& path, const Image& image) {
   const bool named = static_cast<int>(image.channel_names.size()) == image.channels;
   // JPEG has no alpha; keep colour (or grey) only.
   if (!named && (ext == ".jpg" || ext == ".jpeg") && (channels == 2 || channels == 4)) --channels;
-  int alpha = -1;
+  const int alpha = channels < image.channels ? -1 : image.alpha_channel();  // JPEG dropped it
   std::string names;
-  if (named) {
-    for (int c = 0; c < channels; ++c) {
-      names += image.channel_names[c] + "\n";
-      if (image.channel_names[c] == "A") alpha = c;
-    }
-  } else if (channels == 4 || channels == 2) {
-    alpha = channels - 1;
-  }
+  if (named)
+    for (int c = 0; c < channels; ++c) names += image.channel_names[c] + "\n";
   std::vector<const char*> attributes;
   for (const auto& [key, value] : image.attributes) {
     attributes.push_back(key.c_str());

@@ -483,14 +483,7 @@ Image render_mesh(const Mesh& mesh, const RenderOptions& options) {
         for (const Vec2d& uv : mesh.uvs) unit = unit && uv.x >= 0 && uv.x <= 1 && uv.y >= 0 && uv.y <= 1;
         s.texture_wrap = unit ? Wrap::Clamp : Wrap::Repeat;
       }
-      {
-        const Image& t = *o.texture;
-        const auto named = std::find(t.channel_names.begin(), t.channel_names.end(), "A");
-        if (static_cast<int>(t.channel_names.size()) == t.channels && named != t.channel_names.end())
-          s.texture_alpha = static_cast<int>(named - t.channel_names.begin());
-        else if (t.channels == 4 || t.channels == 2)
-          s.texture_alpha = t.channels - 1;
-      }
+      s.texture_alpha = o.texture->alpha_channel();
       break;
   }
 

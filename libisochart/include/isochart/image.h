@@ -35,6 +35,16 @@ struct Image {
         pixels(static_cast<std::size_t>(width_) * height_ * channels_, value) {}
 
   bool empty() const { return pixels.empty(); }
+  /// The alpha channel, or -1: the one named "A" when every channel is named, else the last of
+  /// grey+alpha or RGBA.
+  int alpha_channel() const {
+    if (static_cast<int>(channel_names.size()) == channels) {
+      for (int c = 0; c < channels; ++c)
+        if (channel_names[c] == "A") return c;
+      return -1;
+    }
+    return channels == 2 || channels == 4 ? channels - 1 : -1;
+  }
   float& at(int x, int y, int c) { return pixels[(static_cast<std::size_t>(y) * width + x) * channels + c]; }
   float at(int x, int y, int c) const {
     return pixels[(static_cast<std::size_t>(y) * width + x) * channels + c];
