@@ -23,20 +23,42 @@ Image to_rgb_exemplar(const Image& image, const std::string& name) {
   if (image.width < 4 || image.height < 4)
     throw InputError(name, "exemplar is " + std::to_string(image.width) + "x" +
                                std::to_string(image.height) + " pixels; at least 4x4 is needed");
-  const bool alpha = image.channels == 2 || image.channels == 4;
-  const int colour = alpha ? image.channels - 1 : image.channels;
+  // The same rule as the renderer and the writer for which channel is alpha, so an EXR whose
+  // fourth channel is, say, depth is not taken for a transparent exemplar.
+  const int alpha = image.alpha_channel();
+  // Named channels are taken by name (an EXR may store B, G, R or carry extra channels), the
+  // rest by position.
+  std::vector<int> colour;
+  const auto& names = image.channel_names;
+  if (static_cast<int>(names.size()) == image.channels) {
+    for (const char* want : {"R", "G", "B"}) {
+      const auto it = std::find(names.begin(), names.end(), want);
+      if (it != names.end()) colour.push_back(static_cast<int>(it - names.begin()));
+    }
+    if (colour.size() != 3) colour.clear();
+  }
+  if (colour.empty())
+    for (int c = 0; c < image.channels; ++c)
+      if (c != alpha) colour.push_back(c);
+  if (colour.size() != 1 && colour.size() != 3) {
+    std::string list;
+    for (const std::string& n : names) list += (list.empty() ? "" : ",") + n;
+    throw InputError(name, "exemplar has " + std::to_string(colour.size()) + " colour channels" +
+                               (list.empty() ? "" : " (" + list + ")") +
+                               "; expected grey, grey+alpha, RGB or RGBA");
+  }
   Image rgb(image.width, image.height, 3);
   for (int y = 0; y < image.height; ++y) {
     for (int x = 0; x < image.width; ++x) {
-      if (alpha) {
-        const float a = image.at(x, y, image.channels - 1);
+      if (alpha >= 0) {
+        const float a = image.at(x, y, alpha);
         if (!(a >= 0.999f))
           throw InputError(name, "exemplar pixel (" + std::to_string(x) + "," + std::to_string(y) +
                                      ") is transparent (alpha " + std::to_string(a) +
                                      "); exemplars must be opaque");
       }
       for (int c = 0; c < 3; ++c) {
-        const float v = image.at(x, y, colour == 1 ? 0 : c);
+        const float v = image.at(x, y, colour[colour.size() == 1 ? 0 : c]);
         if (!std::isfinite(v))
           throw InputError(name, "exemplar pixel (" + std::to_string(x) + "," + std::to_string(y) +
                                      ") is not a finite number");

@@ -111,6 +111,18 @@ TEST_CASE("bad exemplars are InputErrors", "[synth]") {
   CHECK(g.at(4, 4, 2) == Approx(0.25).margin(0.003));
   isochart::write_image(tmp / "opaque.png", Image(8, 8, 4, 1.0f));
   CHECK(synth::load_exemplar(tmp / "opaque.png").channels == 3);
+  // Named channels are read by name: a fourth channel that is not "A" is no alpha, and B, G, R
+  // order keeps red red.
+  Image named(8, 8, 4, 0.0f);
+  named.channel_names = {"B", "G", "R", "Z"};
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) named.at(x, y, 2) = 0.75f, named.at(x, y, 3) = 0.1f;
+  const Image n = synth::to_rgb_exemplar(named, "named");
+  CHECK(n.at(1, 1, 0) == 0.75f);
+  CHECK(n.at(1, 1, 2) == 0.0f);
+  Image two(8, 8, 2, 0.5f);
+  two.channel_names = {"U", "V"};
+  CHECK_THROWS_WITH(synth::to_rgb_exemplar(two, "uv.exr"), Catch::Contains("2 colour channels (U,V)"));
   // The CLI turns them into exit code 2 naming the file.
   CHECK(tmp.run("synth builtin:sphere --exemplar " + tmp / "transparent.png" + " -o " + tmp / "out.glb") == 2);
   CHECK(tmp.stderr_text().find("transparent.png") != std::string::npos);
