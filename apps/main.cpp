@@ -81,6 +81,8 @@ int main(int argc, char** argv) {
   const int threads = ctx.opts.threads > 0 ? ctx.opts.threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
 
+  // Ctrl-C or a kill during a run must not leave the batch's temporary files behind.
+  isochart::remove_temporary_files_on_interrupt();
   try {
     // Outputs land together at the end, or not at all when a step fails.
     isochart::OutputBatch outputs;

@@ -197,13 +197,17 @@ void write_image(const std::string& path, const Image& image) {
   attributes.push_back(nullptr);
 
   char message[1024] = {0};
+  track_temporary_file(tmp.string());
   const int status = m.write(tmp.c_str(), image.width, image.height, channels, image.channels,
                              image.pixels.data(), is_float ? 1 : 0, alpha, named ? names.c_str() : nullptr,
                              attributes.data(), message, sizeof message);
+  if (status != kIsochartsImageOk) {
+    fs::remove(tmp, ec);
+    untrack_temporary_file(tmp.string());
+  }
   if (status == kIsochartsImageUnsupported)
     throw InputError(path, "unsupported image format '" + ext + "' (use .png, .jpg, .exr, .tif, ...)");
   if (status != kIsochartsImageOk) {
-    fs::remove(tmp, ec);
     // The writers name the file they wrote, our temporary one; the user knows only `path`.
     std::string detail = message;
     for (std::size_t at; (at = detail.find(tmp.string())) != std::string::npos;)
@@ -215,8 +219,10 @@ void write_image(const std::string& path, const Image& image) {
   if (ec) {
     const std::string reason = ec.message();
     fs::remove(tmp, ec);
+    untrack_temporary_file(tmp.string());
     throw Error(path + ": cannot write: " + reason);
   }
+  untrack_temporary_file(tmp.string());
 }
 
 }  // namespace isochart

@@ -3,6 +3,7 @@
 #include "isochart/io.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -351,14 +352,70 @@ std::string output_target(const std::string& path) {
   return p;
 }
 
+namespace {
+// Fixed storage, written before a slot is marked tracked, so that the signal handler reads only
+// lock-free atomics and plain characters and calls only unlink (async-signal-safe).
+constexpr int kTrackedFiles = 256;
+std::atomic<int> tracked_state[kTrackedFiles];  // 0 free, 1 being filled, 2 tracked
+char tracked_path[kTrackedFiles][PATH_MAX];
+
+extern "C" void remove_tracked_and_reraise(int sig) {
+  for (int i = 0; i < kTrackedFiles; ++i)
+    if (tracked_state[i].load(std::memory_order_acquire) == 2) ::unlink(tracked_path[i]);
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);  // delivered when the handler returns: the process ends as killed by `sig`
+}
+
+void remove_temporary(const std::string& tmp) {
+  std::remove(tmp.c_str());
+  untrack_temporary_file(tmp);
+}
+}  // namespace
+
+void track_temporary_file(const std::string& path) {
+  if (path.size() >= PATH_MAX) return;
+  for (int i = 0; i < kTrackedFiles; ++i) {
+    int free_slot = 0;
+    if (tracked_state[i].compare_exchange_strong(free_slot, 1)) {
+      std::memcpy(tracked_path[i], path.c_str(), path.size() + 1);
+      tracked_state[i].store(2, std::memory_order_release);
+      return;
+    }
+  }
+}
+
+void untrack_temporary_file(const std::string& path) {
+  for (int i = 0; i < kTrackedFiles; ++i)
+    if (tracked_state[i].load(std::memory_order_acquire) == 2 && path == tracked_path[i]) {
+      tracked_state[i].store(0, std::memory_order_release);
+      return;
+    }
+}
+
+void remove_temporary_files_on_interrupt() {
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old_action {};
+    if (::sigaction(sig, nullptr, &old_action) != 0 || old_action.sa_handler == SIG_IGN) continue;
+    struct sigaction action {};
+    action.sa_handler = remove_tracked_and_reraise;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(sig, &action, nullptr);
+  }
+}
+
 void write_file_atomic(const std::string& path, const std::string& data) {
   // pid + counter makes the name unique across processes and threads writing beside each
   // other; the same directory makes the final rename atomic.
   static std::atomic<unsigned> counter{0};
   const std::string target = output_target(path);
   const std::string tmp = target + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+  track_temporary_file(tmp);
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw InputError(path, std::string("cannot write: ") + std::strerror(errno));
+  if (!f) {
+    const int err = errno;
+    untrack_temporary_file(tmp);
+    throw InputError(path, std::string("cannot write: ") + std::strerror(err));
+  }
   bool ok = data.empty() || std::fwrite(data.data(), 1, data.size(), f) == data.size();
   int err = ok ? 0 : errno;
   if (std::fclose(f) != 0 && ok) {
@@ -370,8 +427,9 @@ void write_file_atomic(const std::string& path, const std::string& data) {
     ok = false;
     err = errno;
   }
+  if (ok) untrack_temporary_file(tmp);
   if (!ok) {
-    std::remove(tmp.c_str());
+    remove_temporary(tmp);
     // The file could be created, so the path was fine: the system failed (a full disk, an I/O
     // error), as when an image write fails: exit 1, not the bad-input 2.
     throw Error(path + ": cannot write: " + std::strerror(err));
@@ -386,7 +444,7 @@ OutputBatch::OutputBatch() {
 
 OutputBatch::~OutputBatch() {
   std::lock_guard<std::mutex> lock(batch_mutex);
-  for (const auto& [tmp, target] : staged_) std::remove(tmp.c_str());
+  for (const auto& [tmp, target] : staged_) remove_temporary(tmp);
   batch = nullptr;
   batch_inputs.clear();
 }
@@ -398,7 +456,7 @@ bool OutputBatch::stage(const std::string& tmp, const std::string& target) {
   // alike): the first would be lost, so the run is refused.
   for (auto& [t, g] : batch->staged_)
     if (g == target || same_file(g, target)) {
-      std::remove(tmp.c_str());
+      remove_temporary(tmp);
       throw InputError(target, "cannot write: given as two outputs of this run");
     }
   batch->staged_.emplace_back(tmp, target);
@@ -437,6 +495,7 @@ void OutputBatch::commit() {
       staged_.erase(staged_.begin(), staged_.begin() + static_cast<std::ptrdiff_t>(i));  // the rest: removed
       throw InputError(failed, std::string("cannot write: ") + std::strerror(err));
     }
+    untrack_temporary_file(tmp);
   }
   staged_.clear();
 }

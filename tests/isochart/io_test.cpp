@@ -1,6 +1,9 @@
 #include "isochart/io.h"
 
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -12,6 +15,7 @@
 #include <sstream>
 
 #include "isochart/error.h"
+#include "isochart/image.h"
 #include "isochart/io_test_util.h"
 
 using namespace isochart;
@@ -810,6 +814,46 @@ TEST_CASE("an output batch lands all its files together or none", "[io]") {
   }
   CHECK(d.entries() == std::vector<std::string>{"a.ply", "b.txt", "later.txt", "taken.txt"});
   CHECK(fs::is_empty(d.file("later.txt")));
+}
+
+TEST_CASE("an interrupted run leaves no temporary files", "[io]") {
+  TempDir d;
+  const Mesh m = attributed_cube();
+  write_file_atomic(d.file("old.txt"), "kept");
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    const pid_t child = ::fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+      // As the program does: handlers first, then a batch whose outputs are staged when the
+      // signal comes (Ctrl-C during a long run).
+      remove_temporary_files_on_interrupt();
+      OutputBatch batch;
+      save_mesh(m, d.file("a.obj"));
+      write_file_atomic(d.file("old.txt"), "replaced");
+      write_image(d.file("t.png"), Image(4, 4, 3, 0.5f));
+      ::raise(sig);
+      ::_exit(0);  // not reached
+    }
+    int status = 0;
+    REQUIRE(::waitpid(child, &status, 0) == child);
+    // The process still ends as killed by the signal, and only the old file is there.
+    CHECK(WIFSIGNALED(status));
+    CHECK(WTERMSIG(status) == sig);
+    CHECK(d.entries() == std::vector<std::string>{"old.txt"});
+    CHECK(read_bytes(d.file("old.txt")) == "kept");
+  }
+  // A file renamed into place is no longer tracked: nothing removes it afterwards.
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    remove_temporary_files_on_interrupt();
+    write_file_atomic(d.file("done.txt"), "x");
+    ::raise(SIGTERM);
+    ::_exit(0);
+  }
+  int status = 0;
+  REQUIRE(::waitpid(child, &status, 0) == child);
+  CHECK(d.entries() == std::vector<std::string>{"done.txt", "old.txt"});
 }
 
 TEST_CASE("outputs are written through symbolic links, never over special files", "[io]") {

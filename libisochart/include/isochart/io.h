@@ -83,6 +83,18 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
 /// \throw InputError(path, "cannot write: REASON").
 void write_file_atomic(const std::string& path, const std::string& data);
 
+/// Temporary output files (written beside their target, not yet renamed into place) are tracked
+/// from before they are created until they are renamed or removed, so that an interrupted run
+/// leaves none behind. The writers call these; at most 256 files are tracked at once (more are
+/// written, just not tracked).
+void track_temporary_file(const std::string& path);
+void untrack_temporary_file(const std::string& path);
+
+/// For programs: on SIGINT, SIGTERM or SIGHUP (unless ignored when this is called), removes every
+/// tracked temporary file, then lets the signal end the process as it would have. The library
+/// itself never installs signal handlers.
+void remove_temporary_files_on_interrupt();
+
 /// Whether two paths name one file: the same device and inode when both exist, else the same
 /// path once `.`, `..` and symbolic links are resolved (an output not written yet).
 bool same_file(const std::string& a, const std::string& b);
