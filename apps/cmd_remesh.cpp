@@ -194,7 +194,11 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   if (sizes.size() == 1) {
     lo.width = sizes[0][0];
     lo.height = sizes[0][1];
-    levels.push_back(for_atlas([&] { return mcgim::build_level(atlas, lo, ctx.progress()); }));
+    levels.push_back(for_atlas([&] {
+      mcgim::Level lv = mcgim::build_level(atlas, lo, ctx.progress());
+      mcgim::check_not_empty(lv);
+      return lv;
+    }));
   } else {
     mcgim::PyramidOptions po;
     po.sizes = sizes;

@@ -157,6 +157,13 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
 
 }  // namespace
 
+void check_not_empty(const Level& lv) {
+  if (lv.remesh.mesh.num_faces() > 0) return;
+  throw isochart::InputError("", std::to_string(lv.stats.width) + "x" + std::to_string(lv.stats.height) +
+                                     " level: no 2x2 block of defined samples, so its remesh would be empty "
+                                     "(the charts are too small at that resolution; use a larger one)");
+}
+
 Level build_level(const isochart::Mesh& atlas, const LevelOptions& options, const isochart::Progress& progress) {
   check_options(options);
   const auto t0 = Clock::now();
@@ -189,6 +196,7 @@ std::vector<Level> build_pyramid(const isochart::Mesh& atlas, const PyramidOptio
     o.width = s[0];
     o.height = s[1];
     levels.push_back(build_prepared(a, o, progress));
+    check_not_empty(levels.back());
   }
   levels.front().stats.seconds_charts = seconds;
   for (std::size_t l = 0; l + 1 < levels.size(); ++l) {

@@ -73,6 +73,16 @@ TEST_CASE("isocharts remesh writes watertight levels and reports them", "[mcgim]
   CHECK(run("remesh builtin:sphere -o " + (run.dir / "x.xyz").string()) == 2);
   CHECK(run("remesh builtin:sphere -o " + out + " --atlas builtin:torus") == 2);
   CHECK(run("remesh builtin:sphere -o " + out + " --res 1") == 2);
+  // Too small for any 2x2 block of samples: an empty remesh is refused, not written (it was
+  // written with exit 0 and reported closed and manifold), alone or as a pyramid level.
+  const std::string tiny = (run.dir / "tiny.ply").string();
+  for (const std::string sizes : {"--res 8", "--levels 32,8"}) {
+    CHECK(run("remesh builtin:torus -o " + tiny + " --no-psnr " + sizes) == 2);
+    std::ifstream err(run.dir / "stderr.txt");
+    const std::string message((std::istreambuf_iterator<char>(err)), std::istreambuf_iterator<char>());
+    CHECK(message.find("8x8 level: no 2x2 block of defined samples") != std::string::npos);
+    CHECK_FALSE(fs::exists(tiny));
+  }
   CHECK(run("remesh builtin:sphere -o " + out + " --signal normals --atlas " + out) == 2);
   CHECK(run("remesh builtin:sphere -o " + out + " --signal normals --signal-use all") == 2);
   CHECK(run("remesh builtin:sphere -o " + out + " --signal colors") == 2);  // no colours

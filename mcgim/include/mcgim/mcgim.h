@@ -121,6 +121,11 @@ struct Level {
 Level build_level(const isochart::Mesh& atlas, const LevelOptions& options = {},
                   const isochart::Progress& progress = {});
 
+/// \throw isochart::InputError("", "WxH level: no 2x2 block of defined samples, ...") when the
+///        level's remesh has no triangle: its charts are too small for its resolution. An
+///        empty remesh is no result; build_pyramid checks every level with it.
+void check_not_empty(const Level& level);
+
 struct PyramidOptions {
   /// Resolutions, any order; the levels are returned finest first. Each is packed,
   /// sampled and zippered on its own.
