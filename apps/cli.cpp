@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -118,7 +119,15 @@ void Context::emit(const nlohmann::json& result, const std::string& text) const 
     std::cout << result.dump(2) << "\n";
   else
     std::cout << text;
+  errno = 0;
   std::cout.flush();
+  // The result is the point of the run: lost on the way out (a full disk, a closed terminal),
+  // the run failed, and says so instead of exiting 0.
+  if (!std::cout) {
+    const int err = errno;
+    std::cout.clear();
+    throw isochart::Error(std::string("standard output: cannot write") + (err ? std::string(": ") + std::strerror(err) : ""));
+  }
 }
 
 void bad_option(const std::string& message) { throw isochart::InputError("", message); }

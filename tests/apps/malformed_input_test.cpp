@@ -502,3 +502,21 @@ TEST_CASE("remesh --atlas warns about an atlas whose charts overlap in UV", "[cl
   CHECK_THAT(read_bytes(err), Catch::Contains("isocharts: warning: " + tiled.string() + ": the atlas has ") &&
                                   Catch::Contains("overlapping triangle pairs in UV"));
 }
+
+TEST_CASE("a result that cannot be written to standard output fails the run", "[cli]") {
+  // /dev/full takes no byte: the JSON (or the text) is lost, so the exit code must say so.
+  if (!fs::exists("/dev/full")) return;
+  TempDir tmp("stdout_full");
+  const fs::path err = tmp.path / "err.txt";
+  for (const std::string json : {" --json", ""}) {
+    const std::string cmd = "'" + std::string(ISOCHARTS_CLI) + "' info builtin:sphere" + json + " > /dev/full 2> '" +
+                            err.string() + "'";
+    const int status = std::system(cmd.c_str());
+    CHECK(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 1);
+    std::ifstream in(err);
+    std::string line;
+    std::getline(in, line);
+    CHECK(line == "isocharts: error: standard output: cannot write: No space left on device");
+  }
+}
