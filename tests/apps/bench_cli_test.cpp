@@ -198,7 +198,8 @@ TEST_CASE("bench: bad inputs are one line and exit code 2", "[bench]") {
            {"bench builtin:sphere --methods isochart,isochart", "given twice"},
            {"bench builtin:sphere --methods external:/nonexistent/x.obj", "/nonexistent/x.obj: no such file"},
            {"bench /nonexistent/mesh.obj --methods isochart", "/nonexistent/mesh.obj: no such file"},
-           {"bench builtin:sphere --res 3", "--res must be between 8 and 4096"},
+           {"bench builtin:sphere --res 3", "--res must be between 8 and 2048"},
+           {"bench builtin:sphere --res 4096", "--res must be between 8 and 2048"},
            {"bench builtin:sphere --sweep 1.1,abc", "--sweep: 'abc'"},
        }) {
     INFO(c.args);

@@ -230,6 +230,8 @@ TEST_CASE("bad atlas options are refused with a message naming the option", "[at
   o = {};
   o.pack.width = 0;
   fails_with(o, "--width");
+  o.pack.width = 8193;  // the packer's limit, checked before the atlas is built
+  fails_with(o, "--width");
   o = {};
   o.landmarks = 1;
   fails_with(o, "--landmarks");
