@@ -132,6 +132,19 @@ void Context::emit(const nlohmann::json& result, const std::string& text) const 
 
 void bad_option(const std::string& message) { throw isochart::InputError("", message); }
 
+isochart::MeshFormat output_mesh_format(const std::string& path, const std::vector<isochart::MeshFormat>& allowed,
+                                        const std::string& writes) {
+  const std::string name = path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
+  const auto dot = name.find_last_of('.');
+  if (dot == std::string::npos || dot == 0) throw isochart::InputError(path, "has no file extension (this command writes " + writes + ")");
+  try {
+    const isochart::MeshFormat f = isochart::format_from_path(path);
+    if (std::find(allowed.begin(), allowed.end(), f) != allowed.end()) return f;
+  } catch (const isochart::InputError&) {
+  }
+  throw isochart::InputError(path, "cannot write '" + name.substr(dot) + "' files (this command writes " + writes + ")");
+}
+
 namespace {
 
 // "16384.000000" -> "16384", "0.000061" stays: CLI11 prints range ends with std::to_string.

@@ -95,6 +95,12 @@ std::string parse_error_message(const CLI::App& app, const CLI::ParseError& e);
 /// Throws InputError(file, msg) for an invalid option value (exit code 2).
 [[noreturn]] void bad_option(const std::string& message);
 
+/// The format of an output mesh `path`, which must be one of `allowed`; otherwise an InputError
+/// naming the file and what the command writes (`writes`, e.g. ".obj, .glb or .ply"), before
+/// any work is done.
+isochart::MeshFormat output_mesh_format(const std::string& path, const std::vector<isochart::MeshFormat>& allowed,
+                                        const std::string& writes);
+
 /// Refuses a pyramid resolution given twice in --levels (it would be built and written twice
 /// to the same file).
 void check_levels(const std::vector<int>& levels);

@@ -35,11 +35,9 @@ nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::js
 
 void run_atlas(const Context& ctx, AtlasArgs a) {
   const auto t0 = std::chrono::steady_clock::now();
-  for (const auto& out : a.outputs) {
-    const auto fmt = isochart::format_from_path(out);
-    if (fmt != isochart::MeshFormat::Obj && fmt != isochart::MeshFormat::Glb && fmt != isochart::MeshFormat::Ply)
-      throw isochart::InputError(out, "output must be .obj, .glb or .ply");
-  }
+  for (const auto& out : a.outputs)
+    output_mesh_format(out, {isochart::MeshFormat::Obj, isochart::MeshFormat::Glb, isochart::MeshFormat::Ply},
+                       ".obj, .glb or .ply");
   {
     std::vector<std::string> outs = a.outputs;
     for (const std::string* o : {&a.png, &a.imt_out, &a.signal_texture_out}) outs.push_back(*o);

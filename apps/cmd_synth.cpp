@@ -56,9 +56,8 @@ std::string base_name(const std::string& path) {
 
 void run_synth(const Context& ctx, const SynthArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
-  const isochart::MeshFormat fmt = isochart::format_from_path(a.output);
-  if (fmt != isochart::MeshFormat::Glb && fmt != isochart::MeshFormat::Obj)
-    throw isochart::InputError(a.output, "synth writes .glb or .obj (both are written, with PNG textures)");
+  output_mesh_format(a.output, {isochart::MeshFormat::Glb, isochart::MeshFormat::Obj},
+                     ".glb or .obj; both are written, with PNG textures");
   {
     const std::string stem = stem_of(a.output);
     std::vector<std::string> outs;

@@ -71,6 +71,14 @@ TEST_CASE("isocharts remesh writes watertight levels and reports them", "[mcgim]
   // Bad input exits with 2: exclusive sizes, a bad output extension, an atlas without UVs.
   CHECK(run("remesh builtin:sphere -o " + out + " --res 64 --samples 1000") == 2);
   CHECK(run("remesh builtin:sphere -o " + (run.dir / "x.xyz").string()) == 2);
+  // A format remesh reads but does not write is refused before any work, saying what it writes.
+  CHECK(run("remesh builtin:sphere -o " + (run.dir / "x.off").string()) == 2);
+  {
+    std::ifstream err(run.dir / "stderr.txt");
+    std::string line;
+    std::getline(err, line);
+    CHECK(line.find("x.off: cannot write '.off' files (this command writes .ply, .obj or .glb)") != std::string::npos);
+  }
   CHECK(run("remesh builtin:sphere -o " + out + " --atlas builtin:torus") == 2);
   CHECK(run("remesh builtin:sphere -o " + out + " --res 1") == 2);
   // Too small for any 2x2 block of samples: an empty remesh is refused, not written (it was
