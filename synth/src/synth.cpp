@@ -576,6 +576,29 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     }
   }
 
+  // The other end: resampling keeps at least 4 exemplar pixels across, so a scale that would
+  // shrink the exemplar further at the finest level would be silently capped there (--scale
+  // 1e9 ran as 32 pixels per texel and reported 1e9). Refused when asked for, like a scale
+  // below the floor; the default scale is capped and reported as used.
+  if (pyramid[0].stats.texel_size > 0) {
+    const double max_factor = exemplar.width / 4.0;
+    const double f = res.scale * pyramid[0].stats.texel_size;
+    if (f > max_factor * (1 + 1e-9)) {
+      const double max_scale = max_factor / pyramid[0].stats.texel_size;
+      if (o.scale <= 0 && o.pixels_per_texel <= 0) {
+        res.scale = max_scale;
+      } else {
+        char buf[400];
+        std::snprintf(buf, sizeof buf,
+                      "exemplar scale too large: a texel of the finest level would cover %.4g exemplar pixels, "
+                      "shrinking the %dx%d exemplar below 4 pixels across; the largest scale is %.4g exemplar "
+                      "pixels per unit length (%.4g exemplar pixels per texel)",
+                      f, exemplar.width, exemplar.height, max_scale, max_factor);
+        throw isochart::InputError("", buf);
+      }
+    }
+  }
+
   // Exemplar pyramid: one level per MCGIM level, a pixel the size of that level's texel.
   std::vector<double> factors(nl);
   for (int l = 0; l < nl; ++l) factors[l] = res.scale * pyramid[l].stats.texel_size;

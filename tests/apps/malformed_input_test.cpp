@@ -414,6 +414,13 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
                              Catch::Contains("the smallest scale is") && Catch::EndsWith("pixels per texel)\n"));
   CHECK(std::count(scale_line.begin(), scale_line.end(), '\n') == 1);
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt"});
+  // The other end: a scale that would shrink the exemplar below 4 pixels across ran capped at
+  // that and reported the scale asked for.
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --scale 1e9", err) ==
+        2);
+  CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --scale 1e+09: exemplar scale too large") &&
+                         Catch::Contains("the largest scale is"));
+  CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt"});
   // The largest seed is a seed.
   CHECK(run_cli("-q info builtin:sphere --seed 18446744073709551615", err) == 0);
 }
