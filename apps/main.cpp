@@ -2,6 +2,7 @@
 
 #include <iostream>
 #include <memory>
+#include <string>
 
 #include <tbb/global_control.h>
 #include <tbb/info.h>
@@ -40,6 +41,23 @@ int main(int argc, char** argv) {
   cli::add_bench(app, ctx, action);
   cli::add_sae(app, ctx, action);
 
+  // An empty value ("--report ''", "--png=") would be taken as "not given" and the output silently
+  // skipped; no option or input of ours takes an empty string.
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const auto eq = arg.find('=');
+    if (arg.rfind("--", 0) == 0 && eq != std::string::npos && eq + 1 == arg.size()) {
+      std::cerr << "isocharts: error: " << arg.substr(0, eq) << ": expected a value, got ''\n";
+      return 2;
+    }
+    if (!arg.empty()) continue;
+    const std::string prev = i > 1 ? argv[i - 1] : "";
+    if (prev.size() > 1 && prev[0] == '-' && prev.find('=') == std::string::npos)
+      std::cerr << "isocharts: error: " << prev << ": expected a value, got ''\n";
+    else
+      std::cerr << "isocharts: error: an empty argument was given (argument " << i << ")\n";
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

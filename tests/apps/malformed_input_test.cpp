@@ -378,6 +378,15 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --res: expected an integer from 2 to 2048, got '12x'\n"));
   CHECK(run_cli(atlas + " --png-size 5", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --png-size: expected an integer from 16 to 2896, got '5'\n"));
+  // Options that would do nothing, and empty values that would skip an output, are refused.
+  CHECK(run_cli(atlas + " --png-size 64", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --png-size goes with --png\n"));
+  CHECK(run_cli(atlas + " --beta 0.5", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --beta goes with --signal\n"));
+  CHECK(run_cli(atlas + " --report ''", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --report: expected a value, got ''\n"));
+  CHECK(run_cli(atlas + " --png=", err) == 2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --png: expected a value, got ''\n"));
   // An output in a directory that does not exist is refused before the work, not after it.
   const std::string nodir = (tmp.path / "no_such_dir").string();
   CHECK(run_cli("atlas builtin:sphere -o '" + nodir + "/a.obj'", err) == 2);
