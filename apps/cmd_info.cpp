@@ -54,8 +54,13 @@ void run_info(const Context& ctx, const InfoArgs& a) {
   std::ostringstream t;
   t << a.input << "\n"
     << "  vertices             " << rep.input_vertices << "\n"
-    << "  faces                " << rep.input_faces << "\n"
-    << "  components           " << topo.num_components() << "\n"
+    << "  faces                " << rep.input_faces << "\n";
+  // Polygons are triangulated and repairs drop faces and vertices: the topology below is that
+  // of the mesh the tools use, so its counts are shown when they differ from the file's.
+  if (m.num_faces() != rep.input_faces || m.num_vertices() != rep.input_vertices)
+    t << "  used                 " << m.num_vertices() << " vertices, " << m.num_faces() << " triangles, "
+      << topo.num_edges() << " edges (the topology below)\n";
+  t << "  components           " << topo.num_components() << "\n"
     << "  boundary loops       " << topo.boundary_loops().size() << "\n"
     << "  genus                " << topo.genus() << "\n"
     << "  euler characteristic " << topo.euler_characteristic() << "\n"

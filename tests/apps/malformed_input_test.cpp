@@ -536,3 +536,18 @@ TEST_CASE("a result that cannot be written to standard output fails the run", "[
     CHECK(line == "isocharts: error: standard output: cannot write: No space left on device");
   }
 }
+
+TEST_CASE("info shows the triangle counts its topology is of when the file has polygons", "[cli]") {
+  TempDir tmp("info_quads");
+  const fs::path obj = tmp.path / "cube.obj", out = tmp.path / "out.txt";
+  std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                        "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+  const std::string cmd = "'" + std::string(ISOCHARTS_CLI) + "' -q info '" + obj.string() + "' > '" + out.string() + "'";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  std::ifstream in(out);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // 8 - 18 + 12 = 2: the Euler characteristic is of the 12 triangles, not of the 6 quads.
+  CHECK(text.find("faces                6\n") != std::string::npos);
+  CHECK(text.find("used                 8 vertices, 12 triangles, 18 edges") != std::string::npos);
+  CHECK(text.find("euler characteristic 2\n") != std::string::npos);
+}
