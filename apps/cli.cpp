@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <iostream>
+#include <mutex>
 
 #include "isochart/error.h"
 
@@ -23,7 +24,13 @@ struct Context::ProgressState {
   int last_stage = -1;
 };
 
-Context::Context() : progress_state(std::make_shared<ProgressState>()) {}
+struct Context::Warnings {
+  std::mutex mutex;
+  std::vector<std::string> list;
+};
+
+Context::Context()
+    : warnings(std::make_shared<Warnings>()), progress_state(std::make_shared<ProgressState>()) {}
 
 void Context::check_paths(const std::vector<std::string>& inputs, std::vector<std::string> outputs) const {
   if (!opts.report.empty()) outputs.push_back(opts.report);
@@ -50,6 +57,10 @@ void Context::check_paths(const std::vector<std::string>& inputs, std::vector<st
 }
 
 void Context::warn(const std::string& file, const std::string& message) const {
+  {
+    std::lock_guard<std::mutex> lock(warnings->mutex);
+    warnings->list.push_back((file.empty() ? "" : file + ": ") + message);
+  }
   if (opts.quiet) return;
   end_progress();
   std::cerr << "isocharts: warning: " << (file.empty() ? "" : file + ": ") << message << "\n";
@@ -112,8 +123,13 @@ isochart::LoadResult Context::load(const std::string& path) const {
   return r;
 }
 
-void Context::emit(const nlohmann::json& result, const std::string& text) const {
+void Context::emit(const nlohmann::json& given, const std::string& text) const {
   end_progress();
+  nlohmann::json result = given;
+  if (result.is_object() && !result.contains("warnings")) {
+    std::lock_guard<std::mutex> lock(warnings->mutex);
+    result["warnings"] = warnings->list;
+  }
   if (!opts.report.empty()) isochart::write_file_atomic(opts.report, result.dump(2) + "\n");
   if (opts.json)
     std::cout << result.dump(2) << "\n";

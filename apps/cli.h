@@ -44,8 +44,12 @@ struct Context {
   /// Refuses, before any work, an output (the --report file included) that is one of the
   /// inputs or another output; the writers check again at the end (outputs named later).
   void check_paths(const std::vector<std::string>& inputs, std::vector<std::string> outputs) const;
-  /// Prints `text` (or the JSON when --json) on stdout, and writes the --report file.
+  /// Prints `text` (or the JSON when --json) on stdout, and writes the --report file. The JSON
+  /// gets the run's warnings ("FILE: message", also with -q) as `warnings` unless it has them.
   void emit(const nlohmann::json& result, const std::string& text) const;
+
+  struct Warnings;
+  std::shared_ptr<Warnings> warnings;
 
   struct ProgressState;
   std::shared_ptr<ProgressState> progress_state;

@@ -71,6 +71,13 @@ TEST_CASE("isocharts remesh writes watertight levels and reports them", "[mcgim]
   // Bad input exits with 2: exclusive sizes, a bad output extension, an atlas without UVs.
   CHECK(run("remesh builtin:sphere -o " + out + " --res 64 --samples 1000") == 2);
   CHECK(run("remesh builtin:sphere -o " + (run.dir / "x.xyz").string()) == 2);
+  // Warnings printed on stderr are in the JSON too (also with -q, which silences stderr).
+  REQUIRE(run("-q remesh builtin:torus -o " + (run.dir / "t.ply").string() + " --res 12 --no-psnr --json") == 0);
+  {
+    const nlohmann::json w = run.json()["warnings"];
+    REQUIRE(w.size() == 1);
+    CHECK(w[0].get<std::string>().find("12x12 level does not keep the input's topology") != std::string::npos);
+  }
   // A format remesh reads but does not write is refused before any work, saying what it writes.
   CHECK(run("remesh builtin:sphere -o " + (run.dir / "x.off").string()) == 2);
   {
