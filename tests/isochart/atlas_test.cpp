@@ -88,6 +88,25 @@ TEST_CASE("atlas of an open disk patch is a single chart", "[atlas]") {
   CHECK(a.num_charts() == 1);
 }
 
+TEST_CASE("a flat polygon filled with a fan of slivers is one isometric chart", "[atlas]") {
+  // As CAD files fill a flat n-gon: every triangle from one corner. Geodesics on such slivers
+  // are poor and their embedding split a 200-gon into 6 charts with Linf 3.6; a flat chart's
+  // own plane is an exact layout.
+  Mesh m;
+  const int n = 200;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    m.positions.push_back({std::cos(a), 0.3 * std::cos(a) + 0.2 * std::sin(a), std::sin(a)});  // a tilted plane
+  }
+  for (int i = 1; i + 1 < n; ++i) m.faces.push_back({0, i, i + 1});
+  AtlasOptions o;
+  const Atlas a = build_atlas(m, o);
+  check_atlas(m, a, o);
+  CHECK(a.num_charts() == 1);
+  CHECK(a.stats.l2 == Approx(1.0).epsilon(1e-9));
+  CHECK(a.stats.linf == Approx(1.0).epsilon(1e-6));
+}
+
 TEST_CASE("a sliver triangle (height 1e-10 of its length) gets a chart with area", "[atlas]") {
   // The lone triangle's height came from sqrt(|e2|² − x2²), which cancels to 0 here: the chart
   // had no UV area and the packer refused the mesh ("chart 2 has zero UV area").

@@ -119,3 +119,18 @@ TEST_CASE("multiply_covered_fraction tells a folded layout from a flat one", "[c
   const std::vector<Face> st = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
   CHECK(multiply_covered_fraction(st, sq, 90000) == Approx(1.0 / 3).margin(0.01));
 }
+
+TEST_CASE("a lone sliver triangle (height 1e-10 of its length) is laid out with area", "[chart]") {
+  // Its height came from sqrt(|e2|² − x2²), which cancels to 0 here: the chart had no UV area
+  // and the packer refused the mesh ("chart 2 has zero UV area").
+  ChartGeometry g;
+  g.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, 1e-10, 0}};
+  g.vertex_parent = {0, 1, 2};
+  g.tris = {{0, 1, 2}};
+  g.faces = {0};
+  const ChartParam p = parameterize(g, {}, ParamOptions{});
+  REQUIRE(p.uv.size() == 3);
+  CHECK(p.accepted);
+  CHECK(signed_area(p.uv[0], p.uv[1], p.uv[2]) > 0);
+  CHECK(signed_area(p.uv[0], p.uv[1], p.uv[2]) == Approx(0.5e-10).epsilon(1e-3));
+}
