@@ -19,7 +19,7 @@ extern "C" {
 /// Results of the module's calls. Messages are one line, without the file name.
 enum IsochartsImageStatus {
   kIsochartsImageOk = 0,
-  kIsochartsImageInputError = 1,   ///< the file's fault: unreadable, corrupt, too large, ...
+  kIsochartsImageInputError = 1,   ///< reading: the file is unreadable, corrupt, too large, ...; writing: the format cannot hold the image
   kIsochartsImageUnsupported = 2,  ///< no writer for the extension
   kIsochartsImageError = 3,        ///< anything else (a failed write, out of memory)
 };

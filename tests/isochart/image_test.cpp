@@ -224,6 +224,13 @@ TEST_CASE("write_image errors", "[image]") {
     CHECK_THROWS_AS(write_image(path, img), InputError);
     CHECK(dir.entries() == 0);
   }
+  SECTION("a format that cannot hold the image: the input's fault, nothing left") {
+    // PNM has no alpha: refused by the writer before a byte is written (it was exit 1).
+    CHECK_THROWS_WITH(write_image(dir.file("x.ppm"), gradient_image(2, 2, 4)),
+                      Catch::Contains("cannot write this image in that format"));
+    CHECK_THROWS_AS(write_image(dir.file("x.ppm"), gradient_image(2, 2, 4)), InputError);
+    CHECK(dir.entries() == 0);
+  }
   SECTION("unknown extension") {
     CHECK_THROWS_AS(write_image(dir.file("x.notanimage"), img), InputError);
     CHECK_THROWS_AS(write_image(dir.file("noextension"), img), InputError);
