@@ -1,9 +1,13 @@
 #include "mcgim/image_io.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
 #include "isochart/image.h"
+#include "isochart/mesh.h"
 
 namespace mcgim {
 
@@ -19,15 +23,40 @@ void write_exr(const GeometryImage& im, const std::string& path) {
                     {"isocharts:chart_mirrored", mirrored},
                     {"isocharts:diagonal", "per 2x2 block at its lower-left sample: 1 splits (x+1,y)-(x,y+1), "
                                            "0 splits (x,y)-(x+1,y+1), -1 the shorter one"}};
+  // EXR positions are 32-bit floats. A mesh far from the origin for its size would lose its
+  // shape to their rounding (1e9 units out, a unit-sized mesh collapsed to a point), so there
+  // the positions are stored relative to its box centre, given as isocharts:position_origin;
+  // without that attribute they are absolute. Float error up to 1e-5 of the diagonal is kept
+  // as it is (well under a sample's spacing), so ordinary meshes are written as before.
+  isochart::Vec3d origin;
+  {
+    isochart::BoundingBox box;
+    double max_abs = 0;
+    bool any = false;
+    for (std::size_t i = 0; i < im.positions.size(); ++i) {
+      if (!im.defined(static_cast<int>(i))) continue;
+      const isochart::Vec3d& q = im.positions[i];
+      box.min = any ? isochart::Vec3d{std::min(box.min.x, q.x), std::min(box.min.y, q.y), std::min(box.min.z, q.z)} : q;
+      box.max = any ? isochart::Vec3d{std::max(box.max.x, q.x), std::max(box.max.y, q.y), std::max(box.max.z, q.z)} : q;
+      max_abs = std::max({max_abs, std::abs(q.x), std::abs(q.y), std::abs(q.z)});
+      any = true;
+    }
+    if (any && std::ldexp(max_abs, -24) > 1e-5 * box.diagonal()) {
+      origin = (box.min + box.max) * 0.5;
+      char text[96];
+      std::snprintf(text, sizeof text, "%.17g %.17g %.17g", origin.x, origin.y, origin.z);
+      out.attributes.emplace_back("isocharts:position_origin", text);
+    }
+  }
   std::vector<float>& px = out.pixels;
   for (int y = 0; y < H; ++y)
     for (int x = 0; x < W; ++x) {
       const int i = im.index(x, y);
       float* p = &px[(static_cast<std::size_t>(H - 1 - y) * W + x) * nch];
       const bool def = im.defined(i);
-      p[0] = static_cast<float>(im.positions[i].x);
-      p[1] = static_cast<float>(im.positions[i].y);
-      p[2] = static_cast<float>(im.positions[i].z);
+      p[0] = static_cast<float>(im.positions[i].x - origin.x);
+      p[1] = static_cast<float>(im.positions[i].y - origin.y);
+      p[2] = static_cast<float>(im.positions[i].z - origin.z);
       p[3] = static_cast<float>(im.normals[i].x);
       p[4] = static_cast<float>(im.normals[i].y);
       p[5] = static_cast<float>(im.normals[i].z);

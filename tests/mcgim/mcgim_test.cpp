@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <map>
 #include <string>
 
@@ -356,6 +358,49 @@ TEST_CASE("geometry images are written as EXR and PNG", "[mcgim][io]") {
   const isochart::Image preview = isochart::read_image(png);
   CHECK(preview.width == 32);
   CHECK(preview.channels == 3);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("an EXR of a mesh far from the origin keeps its shape", "[mcgim][io]") {
+  // 1e9 units out a unit sphere's float positions all round to the same few values; stored
+  // relative to a named origin they keep the shape. Near the origin nothing changes.
+  Level lv = build_level(mcgim_test::sphere_atlas(12, 24), keep_layout(32));
+  const std::string dir = std::filesystem::temp_directory_path() / "mcgim_far_exr_test";
+  std::filesystem::create_directories(dir);
+  auto header_has_origin = [](const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    return bytes.find("isocharts:position_origin") != std::string::npos;
+  };
+  write_exr(lv.image, dir + "/near.exr");
+  CHECK_FALSE(header_has_origin(dir + "/near.exr"));
+  const isochart::Vec3d shift{1e9, -2e9, 5e8};
+  for (auto& p : lv.image.positions) p += shift;
+  write_exr(lv.image, dir + "/far.exr");
+  CHECK(header_has_origin(dir + "/far.exr"));
+  const isochart::Image in = isochart::read_image(dir + "/far.exr");
+  int cx = -1;
+  for (int c = 0; c < in.channels; ++c)
+    if (in.channel_names[c] == "R") cx = c;
+  REQUIRE(cx >= 0);
+  // x differences between defined samples are those of the sphere (float error of unit-sized
+  // values), not the 0 or 64 that absolute floats at 1e9 give.
+  double worst = 0;
+  int first = -1;
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      const int i = lv.image.index(x, y);
+      if (!lv.image.defined(i)) continue;
+      const double fx = in.pixels[(static_cast<std::size_t>(31 - y) * 32 + x) * in.channels + cx];
+      if (first < 0) {
+        first = i;
+        continue;
+      }
+      const int fy0 = 31 - first / 32, fx0 = first % 32;
+      const double f0 = in.pixels[(static_cast<std::size_t>(fy0) * 32 + fx0) * in.channels + cx];
+      worst = std::max(worst, std::abs((fx - f0) - (lv.image.positions[i].x - lv.image.positions[first].x)));
+    }
+  CHECK(worst < 1e-6);
   std::filesystem::remove_all(dir);
 }
 
