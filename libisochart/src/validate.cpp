@@ -7,7 +7,11 @@
 // which turns the gluing into the output's vertex sharing.
 #include "isochart/validate.h"
 
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Constrained_triangulation_face_base_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
 
 #include <algorithm>
 #include <climits>
@@ -53,8 +57,63 @@ K::Point_3 point(const Vec3d& p) {
 
 // ---- Polygon triangulation -------------------------------------------------------------
 
-// Polygons beyond this size are fanned: ear clipping is quadratic per ear.
+// Polygons beyond this size get a constrained Delaunay triangulation instead: ear clipping is
+// quadratic per ear.
 constexpr std::size_t kMaxEarClipping = 2000;
+
+// A simple polygon (projected, counter-clockwise) triangulated by a constrained Delaunay
+// triangulation of its edges, keeping the faces inside; false (nothing appended) when the
+// polygon is not simple (edges crossing, repeated points), which the caller fans instead.
+bool triangulate_cdt(const std::vector<K::Point_2>& p, const std::vector<int>& corners,
+                     std::vector<std::array<int, 3>>& out) {
+  using Vb = CGAL::Triangulation_vertex_base_with_info_2<int, K>;
+  using Fbi = CGAL::Triangulation_face_base_with_info_2<int, K>;  // 1 inside, 0 outside
+  using Fb = CGAL::Constrained_triangulation_face_base_2<K, Fbi>;
+  using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
+  using Cdt = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::No_constraint_intersection_tag>;
+  const int n = static_cast<int>(p.size());
+  Cdt cdt;
+  std::vector<Cdt::Vertex_handle> v(n);
+  try {
+    for (int i = 0; i < n; ++i) {
+      v[i] = cdt.insert(p[i]);
+      v[i]->info() = i;
+    }
+    if (cdt.number_of_vertices() != static_cast<std::size_t>(n)) return false;  // a repeated point
+    for (int i = 0; i < n; ++i) cdt.insert_constraint(v[i], v[(i + 1) % n]);
+  } catch (const std::exception&) {
+    return false;  // crossing edges
+  }
+  // Inside: reached from the infinite faces across an odd number of constrained edges.
+  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info() = -1;
+  std::vector<Cdt::Face_handle> stack{cdt.infinite_face()}, next;
+  cdt.infinite_face()->info() = 0;
+  for (int level = 0; !stack.empty(); ++level) {
+    while (!stack.empty()) {
+      const Cdt::Face_handle f = stack.back();
+      stack.pop_back();
+      for (int k = 0; k < 3; ++k) {
+        const Cdt::Face_handle g = f->neighbor(k);
+        if (g->info() != -1) continue;
+        if (cdt.is_constrained({f, k})) {
+          g->info() = level + 1;
+          next.push_back(g);
+        } else {
+          g->info() = level;
+          stack.push_back(g);
+        }
+      }
+    }
+    std::swap(stack, next);
+  }
+  std::vector<std::array<int, 3>> tris;
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+    if (f->info() % 2 == 1)
+      tris.push_back({corners[f->vertex(0)->info()], corners[f->vertex(1)->info()], corners[f->vertex(2)->info()]});
+  if (static_cast<int>(tris.size()) != n - 2) return false;  // not a simple polygon after all
+  out.insert(out.end(), tris.begin(), tris.end());
+  return true;
+}
 
 // Ear clipping in the plane across the dominant axis of the polygon's Newell normal; that
 // projection only drops a coordinate, so the 2D predicates are exact on the input values.
@@ -77,7 +136,7 @@ void triangulate(const std::vector<Vec3d>& pos, const std::vector<int>& poly, co
     for (int i = 1; i + 1 < n; ++i)
       out.push_back({corners[from], corners[(from + i) % n], corners[(from + i + 1) % n]});
   };
-  if (normal[axis] == 0 || static_cast<std::size_t>(n) > kMaxEarClipping) {
+  if (normal[axis] == 0) {
     fan(0);
     return;
   }
@@ -87,6 +146,12 @@ void triangulate(const std::vector<Vec3d>& pos, const std::vector<int>& poly, co
   for (int i = 0; i < n; ++i) {
     const Vec3d& q = pos[poly[corners[i]]];
     p[i] = flip ? K::Point_2(q[v], q[u]) : K::Point_2(q[u], q[v]);
+  }
+  if (static_cast<std::size_t>(n) > kMaxEarClipping) {
+    // A fan of a concave polygon overlaps itself: a 4,000-gon star came out with half its
+    // triangles turned over.
+    if (!triangulate_cdt(p, corners, out)) fan(0);
+    return;
   }
   std::vector<int> prev(n), next(n);
   for (int i = 0; i < n; ++i) {

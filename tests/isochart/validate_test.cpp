@@ -190,6 +190,38 @@ TEST_CASE("polygons are triangulated without flips or lost area", "[validate]") 
   CHECK_THAT(error_of(r, false), Catch::Contains("face 0 has 6 corners") && Catch::Contains("use repair"));
 }
 
+TEST_CASE("a large concave polygon is triangulated without flips", "[validate]") {
+  // Beyond ear clipping's size (2,000 corners) a constrained Delaunay triangulation takes
+  // over: a fan of this star turned half its triangles over, on top of the others.
+  const int n = 4000;
+  std::vector<Vec3d> pos;
+  std::vector<int> poly;
+  double area = 0;
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n, r = i % 2 == 0 ? 1.0 : 0.5;
+    pos.push_back({r * std::cos(a), r * std::sin(a), 0});
+    poly.push_back(i);
+  }
+  for (int i = 0; i < n; ++i) area += 0.5 * (pos[i].x * pos[(i + 1) % n].y - pos[(i + 1) % n].x * pos[i].y);
+  ValidationReport rep;
+  const Mesh m = validate(raw_of(pos, {poly}), rep);
+  REQUIRE(m.num_faces() == n - 2);
+  double sum = 0;
+  int flipped = 0;
+  for (const auto& f : m.faces) {
+    const double z = cross(m.positions[f[1]] - m.positions[f[0]], m.positions[f[2]] - m.positions[f[0]]).z;
+    flipped += z <= 0 ? 1 : 0;
+    sum += z / 2;
+  }
+  CHECK(flipped == 0);
+  CHECK(sum == Approx(area).epsilon(1e-12));
+  check_clean(m);
+  // A large polygon whose edges cross cannot be triangulated inside: it is fanned, as before.
+  std::swap(poly[10], poly[2000]);
+  ValidationReport rep2;
+  CHECK(validate(raw_of(pos, {poly}), rep2).num_faces() > 0);
+}
+
 TEST_CASE("a quad mesh triangulates into the closed cube", "[validate]") {
   ValidationReport rep;
   const Mesh m = validate(cube_quads(), rep);
