@@ -49,10 +49,10 @@ double flipped_fraction(const detail::ChartGeometry& g, const std::vector<Vec2d>
 }
 
 // A flat chart's own layout: its vertices projected onto its plane (an isometry, L2 = Linf = 1),
-// with the faces' winding; empty unless every vertex lies within 1e-9 of the chart's size of
-// that plane and every face faces the same way. CAD files fill flat polygons with fans of long
-// slivers, on which geodesics and their embedding are poor: a flat 200-gon came out as 6
-// charts with Linf 3.6.
+// with the faces' winding; empty unless every vertex lies within 1e-6 of the chart's size of
+// that plane (coordinates written with six or seven digits, as CAD exports do) and every face
+// faces the same way. CAD files fill flat polygons with fans of long slivers, on which
+// geodesics and their embedding are poor: a flat 200-gon came out as 6 charts with Linf 3.6.
 std::vector<Vec2d> planar_layout(const detail::ChartGeometry& g) {
   Vec3d n;
   for (const Face& t : g.tris) n += cross(g.positions[t[1]] - g.positions[t[0]], g.positions[t[2]] - g.positions[t[0]]);
@@ -63,7 +63,7 @@ std::vector<Vec2d> planar_layout(const detail::ChartGeometry& g) {
   const double size = box.diagonal();
   const Vec3d& o = g.positions[0];
   for (const Vec3d& p : g.positions)
-    if (std::abs(dot(p - o, n)) > 1e-9 * size) return {};
+    if (std::abs(dot(p - o, n)) > 1e-6 * size) return {};
   for (const Face& t : g.tris)
     if (!(dot(cross(g.positions[t[1]] - g.positions[t[0]], g.positions[t[2]] - g.positions[t[0]]), n) > 0)) return {};
   // Any orthonormal basis (e1, e2) with e1 × e2 = n keeps the winding.

@@ -96,15 +96,17 @@ TEST_CASE("a flat polygon filled with a fan of slivers is one isometric chart", 
   const int n = 200;
   for (int i = 0; i < n; ++i) {
     const double a = 2 * M_PI * i / n;
-    m.positions.push_back({std::cos(a), 0.3 * std::cos(a) + 0.2 * std::sin(a), std::sin(a)});  // a tilted plane
+    // A tilted plane, its coordinates rounded to six decimals as a CAD export writes them.
+    auto r6 = [](double x) { return std::round(x * 1e6) / 1e6; };
+    m.positions.push_back({r6(std::cos(a)), r6(0.3 * std::cos(a) + 0.2 * std::sin(a)), r6(std::sin(a))});
   }
   for (int i = 1; i + 1 < n; ++i) m.faces.push_back({0, i, i + 1});
   AtlasOptions o;
   const Atlas a = build_atlas(m, o);
   check_atlas(m, a, o);
   CHECK(a.num_charts() == 1);
-  CHECK(a.stats.l2 == Approx(1.0).epsilon(1e-9));
-  CHECK(a.stats.linf == Approx(1.0).epsilon(1e-6));
+  CHECK(a.stats.l2 == Approx(1.0).epsilon(1e-6));
+  CHECK(a.stats.linf == Approx(1.0).epsilon(1e-4));
 }
 
 TEST_CASE("a sliver triangle (height 1e-10 of its length) gets a chart with area", "[atlas]") {
