@@ -142,23 +142,28 @@ void Context::emit(const nlohmann::json& given, const std::string& text) const {
   if (!std::cout) {
     const int err = errno;
     std::cout.clear();
-    throw isochart::Error(std::string("standard output: cannot write") + (err ? std::string(": ") + std::strerror(err) : ""));
+    throw isochart::Error(std::string("standard output: cannot write") +
+                          (err ? std::string(": ") + std::strerror(err) : ""));
   }
 }
 
 void bad_option(const std::string& message) { throw isochart::InputError("", message); }
 
-isochart::MeshFormat output_mesh_format(const std::string& path, const std::vector<isochart::MeshFormat>& allowed,
+isochart::MeshFormat output_mesh_format(const std::string& path,
+                                        const std::vector<isochart::MeshFormat>& allowed,
                                         const std::string& writes) {
-  const std::string name = path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
+  const std::string name =
+      path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
   const auto dot = name.find_last_of('.');
-  if (dot == std::string::npos || dot == 0) throw isochart::InputError(path, "has no file extension (this command writes " + writes + ")");
+  if (dot == std::string::npos || dot == 0)
+    throw isochart::InputError(path, "has no file extension (this command writes " + writes + ")");
   try {
     const isochart::MeshFormat f = isochart::format_from_path(path);
     if (std::find(allowed.begin(), allowed.end(), f) != allowed.end()) return f;
   } catch (const isochart::InputError&) {
   }
-  throw isochart::InputError(path, "cannot write '" + name.substr(dot) + "' files (this command writes " + writes + ")");
+  throw isochart::InputError(
+      path, "cannot write '" + name.substr(dot) + "' files (this command writes " + writes + ")");
 }
 
 namespace {

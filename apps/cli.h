@@ -102,7 +102,8 @@ std::string parse_error_message(const CLI::App& app, const CLI::ParseError& e);
 /// The format of an output mesh `path`, which must be one of `allowed`; otherwise an InputError
 /// naming the file and what the command writes (`writes`, e.g. ".obj, .glb or .ply"), before
 /// any work is done.
-isochart::MeshFormat output_mesh_format(const std::string& path, const std::vector<isochart::MeshFormat>& allowed,
+isochart::MeshFormat output_mesh_format(const std::string& path,
+                                        const std::vector<isochart::MeshFormat>& allowed,
                                         const std::string& writes);
 
 /// Refuses a pyramid resolution given twice in --levels (it would be built and written twice

@@ -109,7 +109,8 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
       for (const std::string& d : derived) ctx.check_paths(inputs, {d});
     }
   }
-  output_mesh_format(a.output, {isochart::MeshFormat::Ply, isochart::MeshFormat::Obj, isochart::MeshFormat::Glb},
+  output_mesh_format(a.output,
+                     {isochart::MeshFormat::Ply, isochart::MeshFormat::Obj, isochart::MeshFormat::Glb},
                      ".ply, .obj or .glb");
 
   const isochart::Mesh input = load_any(ctx, a.input);

@@ -55,7 +55,8 @@ double flipped_fraction(const detail::ChartGeometry& g, const std::vector<Vec2d>
 // geodesics and their embedding are poor: a flat 200-gon came out as 6 charts with Linf 3.6.
 std::vector<Vec2d> planar_layout(const detail::ChartGeometry& g) {
   Vec3d n;
-  for (const Face& t : g.tris) n += cross(g.positions[t[1]] - g.positions[t[0]], g.positions[t[2]] - g.positions[t[0]]);
+  for (const Face& t : g.tris)
+    n += cross(g.positions[t[1]] - g.positions[t[0]], g.positions[t[2]] - g.positions[t[0]]);
   const double len = norm(n);
   if (!(len > 0)) return {};
   n = n / len;
@@ -65,12 +66,14 @@ std::vector<Vec2d> planar_layout(const detail::ChartGeometry& g) {
   for (const Vec3d& p : g.positions)
     if (std::abs(dot(p - o, n)) > 1e-6 * size) return {};
   for (const Face& t : g.tris)
-    if (!(dot(cross(g.positions[t[1]] - g.positions[t[0]], g.positions[t[2]] - g.positions[t[0]]), n) > 0)) return {};
+    if (!(dot(cross(g.positions[t[1]] - g.positions[t[0]], g.positions[t[2]] - g.positions[t[0]]), n) > 0))
+      return {};
   // Any orthonormal basis (e1, e2) with e1 × e2 = n keeps the winding.
   const Vec3d a = std::abs(n.x) < 0.9 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
   const Vec3d e1 = normalized(cross(a, n)), e2 = cross(n, e1);
   std::vector<Vec2d> uv(g.positions.size());
-  for (std::size_t v = 0; v < uv.size(); ++v) uv[v] = {dot(g.positions[v] - o, e1), dot(g.positions[v] - o, e2)};
+  for (std::size_t v = 0; v < uv.size(); ++v)
+    uv[v] = {dot(g.positions[v] - o, e1), dot(g.positions[v] - o, e2)};
   return uv;
 }
 

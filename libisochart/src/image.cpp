@@ -213,7 +213,8 @@ void write_image(const std::string& path, const Image& image) {
     for (std::size_t at; (at = detail.find(tmp.string())) != std::string::npos;)
       detail.replace(at, tmp.string().size(), path);
     if (status == kIsochartsImageInputError)
-      throw InputError(path, "cannot write this image in that format" + (detail.empty() ? std::string() : ": " + detail));
+      throw InputError(
+          path, "cannot write this image in that format" + (detail.empty() ? std::string() : ": " + detail));
     throw Error(path + ": cannot write" + (detail.empty() ? std::string() : ": " + detail));
   }
   if (OutputBatch::stage(tmp.string(), target.string())) return;

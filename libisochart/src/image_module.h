@@ -19,7 +19,9 @@ extern "C" {
 /// Results of the module's calls. Messages are one line, without the file name.
 enum IsochartsImageStatus {
   kIsochartsImageOk = 0,
-  kIsochartsImageInputError = 1,   ///< reading: the file is unreadable, corrupt, too large, ...; writing: the format cannot hold the image
+  /// Reading: the file is unreadable, corrupt, too large, ...; writing: the format cannot hold
+  /// the image (PNM and alpha, ICO over 256x256).
+  kIsochartsImageInputError = 1,
   kIsochartsImageUnsupported = 2,  ///< no writer for the extension
   kIsochartsImageError = 3,        ///< anything else (a failed write, out of memory)
 };

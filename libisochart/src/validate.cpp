@@ -20,7 +20,6 @@
 #include <numeric>
 
 #include "isochart/error.h"
-
 #include "isochart/union_find.h"
 
 namespace isochart {
@@ -109,7 +108,8 @@ bool triangulate_cdt(const std::vector<K::Point_2>& p, const std::vector<int>& c
   std::vector<std::array<int, 3>> tris;
   for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
     if (f->info() % 2 == 1)
-      tris.push_back({corners[f->vertex(0)->info()], corners[f->vertex(1)->info()], corners[f->vertex(2)->info()]});
+      tris.push_back(
+          {corners[f->vertex(0)->info()], corners[f->vertex(1)->info()], corners[f->vertex(2)->info()]});
   if (static_cast<int>(tris.size()) != n - 2) return false;  // not a simple polygon after all
   out.insert(out.end(), tris.begin(), tris.end());
   return true;

@@ -29,19 +29,14 @@ void write_exr(const GeometryImage& im, const std::string& path) {
   // without that attribute they are absolute. Float error up to 1e-5 of the diagonal is kept
   // as it is (well under a sample's spacing), so ordinary meshes are written as before.
   isochart::Vec3d origin;
-  {
-    isochart::BoundingBox box;
-    double max_abs = 0;
-    bool any = false;
-    for (std::size_t i = 0; i < im.positions.size(); ++i) {
-      if (!im.defined(static_cast<int>(i))) continue;
-      const isochart::Vec3d& q = im.positions[i];
-      box.min = any ? isochart::Vec3d{std::min(box.min.x, q.x), std::min(box.min.y, q.y), std::min(box.min.z, q.z)} : q;
-      box.max = any ? isochart::Vec3d{std::max(box.max.x, q.x), std::max(box.max.y, q.y), std::max(box.max.z, q.z)} : q;
-      max_abs = std::max({max_abs, std::abs(q.x), std::abs(q.y), std::abs(q.z)});
-      any = true;
-    }
-    if (any && std::ldexp(max_abs, -24) > 1e-5 * box.diagonal()) {
+  std::vector<isochart::Vec3d> defined;
+  for (std::size_t i = 0; i < im.positions.size(); ++i)
+    if (im.defined(static_cast<int>(i))) defined.push_back(im.positions[i]);
+  if (!defined.empty()) {
+    const isochart::BoundingBox box = isochart::bounding_box(defined);
+    const double max_abs = std::max({std::abs(box.min.x), std::abs(box.min.y), std::abs(box.min.z),
+                                     std::abs(box.max.x), std::abs(box.max.y), std::abs(box.max.z)});
+    if (std::ldexp(max_abs, -24) > 1e-5 * box.diagonal()) {
       origin = (box.min + box.max) * 0.5;
       char text[96];
       std::snprintf(text, sizeof text, "%.17g %.17g %.17g", origin.x, origin.y, origin.z);

@@ -589,11 +589,12 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
         res.scale = max_scale;
       } else {
         char buf[400];
-        std::snprintf(buf, sizeof buf,
-                      "exemplar scale too large: a texel of the finest level would cover %.4g exemplar pixels, "
-                      "shrinking the %dx%d exemplar below 4 pixels across; the largest scale is %.4g exemplar "
-                      "pixels per unit length (%.4g exemplar pixels per texel)",
-                      f, exemplar.width, exemplar.height, max_scale, max_factor);
+        std::snprintf(
+            buf, sizeof buf,
+            "exemplar scale too large: a texel of the finest level would cover %.4g exemplar pixels, "
+            "shrinking the %dx%d exemplar below 4 pixels across; the largest scale is %.4g exemplar "
+            "pixels per unit length (%.4g exemplar pixels per texel)",
+            f, exemplar.width, exemplar.height, max_scale, max_factor);
         throw isochart::InputError("", buf);
       }
     }

@@ -425,8 +425,9 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt"});
   // The other end: a scale that would shrink the exemplar below 4 pixels across ran capped at
   // that and reported the scale asked for.
-  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --scale 1e9", err) ==
-        2);
+  CHECK(
+      run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --scale 1e9",
+              err) == 2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --scale 1e+09: exemplar scale too large") &&
                          Catch::Contains("the largest scale is"));
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt"});
@@ -525,8 +526,8 @@ TEST_CASE("a result that cannot be written to standard output fails the run", "[
   TempDir tmp("stdout_full");
   const fs::path err = tmp.path / "err.txt";
   for (const std::string json : {" --json", ""}) {
-    const std::string cmd = "'" + std::string(ISOCHARTS_CLI) + "' info builtin:sphere" + json + " > /dev/full 2> '" +
-                            err.string() + "'";
+    const std::string cmd = "'" + std::string(ISOCHARTS_CLI) + "' info builtin:sphere" + json +
+                            " > /dev/full 2> '" + err.string() + "'";
     const int status = std::system(cmd.c_str());
     CHECK(WIFEXITED(status));
     CHECK(WEXITSTATUS(status) == 1);
@@ -542,7 +543,8 @@ TEST_CASE("info shows the triangle counts its topology is of when the file has p
   const fs::path obj = tmp.path / "cube.obj", out = tmp.path / "out.txt";
   std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
                         "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
-  const std::string cmd = "'" + std::string(ISOCHARTS_CLI) + "' -q info '" + obj.string() + "' > '" + out.string() + "'";
+  const std::string cmd =
+      "'" + std::string(ISOCHARTS_CLI) + "' -q info '" + obj.string() + "' > '" + out.string() + "'";
   REQUIRE(std::system(cmd.c_str()) == 0);
   std::ifstream in(out);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

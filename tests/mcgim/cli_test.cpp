@@ -72,11 +72,13 @@ TEST_CASE("isocharts remesh writes watertight levels and reports them", "[mcgim]
   CHECK(run("remesh builtin:sphere -o " + out + " --res 64 --samples 1000") == 2);
   CHECK(run("remesh builtin:sphere -o " + (run.dir / "x.xyz").string()) == 2);
   // Warnings printed on stderr are in the JSON too (also with -q, which silences stderr).
-  REQUIRE(run("-q remesh builtin:torus -o " + (run.dir / "t.ply").string() + " --res 12 --no-psnr --json") == 0);
+  REQUIRE(run("-q remesh builtin:torus -o " + (run.dir / "t.ply").string() + " --res 12 --no-psnr --json") ==
+          0);
   {
     const nlohmann::json w = run.json()["warnings"];
     REQUIRE(w.size() == 1);
-    CHECK(w[0].get<std::string>().find("12x12 level does not keep the input's topology") != std::string::npos);
+    CHECK(w[0].get<std::string>().find("12x12 level does not keep the input's topology") !=
+          std::string::npos);
   }
   // A format remesh reads but does not write is refused before any work, saying what it writes.
   CHECK(run("remesh builtin:sphere -o " + (run.dir / "x.off").string()) == 2);
@@ -84,7 +86,8 @@ TEST_CASE("isocharts remesh writes watertight levels and reports them", "[mcgim]
     std::ifstream err(run.dir / "stderr.txt");
     std::string line;
     std::getline(err, line);
-    CHECK(line.find("x.off: cannot write '.off' files (this command writes .ply, .obj or .glb)") != std::string::npos);
+    CHECK(line.find("x.off: cannot write '.off' files (this command writes .ply, .obj or .glb)") !=
+          std::string::npos);
   }
   CHECK(run("remesh builtin:sphere -o " + out + " --atlas builtin:torus") == 2);
   CHECK(run("remesh builtin:sphere -o " + out + " --res 1") == 2);
