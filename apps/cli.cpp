@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
 #include <mutex>
 
@@ -152,18 +153,15 @@ void bad_option(const std::string& message) { throw isochart::InputError("", mes
 isochart::MeshFormat output_mesh_format(const std::string& path,
                                         const std::vector<isochart::MeshFormat>& allowed,
                                         const std::string& writes) {
-  const std::string name =
-      path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
-  const auto dot = name.find_last_of('.');
-  if (dot == std::string::npos || dot == 0)
-    throw isochart::InputError(path, "has no file extension (this command writes " + writes + ")");
+  const std::string ext = std::filesystem::path(path).extension().string();  // ".obj" alone has none
+  if (ext.empty()) throw isochart::InputError(path, "has no file extension (this command writes " + writes + ")");
   try {
     const isochart::MeshFormat f = isochart::format_from_path(path);
     if (std::find(allowed.begin(), allowed.end(), f) != allowed.end()) return f;
   } catch (const isochart::InputError&) {
   }
   throw isochart::InputError(
-      path, "cannot write '" + name.substr(dot) + "' files (this command writes " + writes + ")");
+      path, "cannot write '" + ext + "' files (this command writes " + writes + ")");
 }
 
 namespace {

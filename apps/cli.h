@@ -2,10 +2,12 @@
 // Conventions shared by every subcommand: global options, progress line, warnings, and
 // how results reach stdout (text or JSON) and the --report file.
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -98,6 +100,17 @@ std::string parse_error_message(const CLI::App& app, const CLI::ParseError& e);
 
 /// Throws InputError(file, msg) for an invalid option value (exit code 2).
 [[noreturn]] void bad_option(const std::string& message);
+
+/// Which of some options were typed on the command line, so that one that would do nothing
+/// is refused instead of ignored. `record` runs in the subcommand's callback, after parsing.
+struct GivenOptions {
+  std::vector<std::string> names;
+  void record(const CLI::App* sub, std::initializer_list<const char*> options) {
+    for (const char* name : options)
+      if (sub->count(name) > 0) names.push_back(name);
+  }
+  bool has(const char* name) const { return std::find(names.begin(), names.end(), name) != names.end(); }
+};
 
 /// The format of an output mesh `path`, which must be one of `allowed`; otherwise an InputError
 /// naming the file and what the command writes (`writes`, e.g. ".obj, .glb or .ply"), before

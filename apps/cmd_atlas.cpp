@@ -1,7 +1,7 @@
 // `isocharts atlas IN -o OUT.obj`: the iso-chart texture atlas of a mesh.
 
-#include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <sstream>
 
 #include "cli.h"
@@ -30,20 +30,22 @@ struct AtlasArgs {
   std::string signal_texture_out;
   int sae_res = 256;
   isochart::SignalAtlasOptions signal_options;
-  std::vector<std::string> given;  // options typed on the command line, to refuse ones that do nothing
-  bool has(const char* name) const { return std::find(given.begin(), given.end(), name) != given.end(); }
+  GivenOptions given;
 };
+
+// Options that only a signal-specialized atlas reads.
+constexpr std::initializer_list<const char*> kSignalOptions = {
+    "--signal-use", "--beta", "--lambda", "--chart-lambda", "--split-efficiency", "--max-geometric-l2", "--sae-res"};
 
 nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
 
 void run_atlas(const Context& ctx, AtlasArgs a) {
   const auto t0 = std::chrono::steady_clock::now();
   // An option that would be silently ignored is more likely a mistake than a wish.
-  if (a.has("--png-size") && a.png.empty()) bad_option("--png-size goes with --png");
+  if (a.given.has("--png-size") && a.png.empty()) bad_option("--png-size goes with --png");
   if (a.signal.empty())
-    for (const char* name : {"--signal-use", "--beta", "--lambda", "--chart-lambda", "--split-efficiency",
-                             "--max-geometric-l2", "--sae-res"})
-      if (a.has(name)) bad_option(std::string(name) + " goes with --signal");
+    for (const char* name : kSignalOptions)
+      if (a.given.has(name)) bad_option(std::string(name) + " goes with --signal");
   for (const auto& out : a.outputs)
     output_mesh_format(out, {isochart::MeshFormat::Obj, isochart::MeshFormat::Glb, isochart::MeshFormat::Ply},
                        ".obj, .glb or .ply");
@@ -231,9 +233,8 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
                   "Write the signal baked into the atlas at --sae-res (normals as 0.5n+0.5)");
   sub->footer("Example: isocharts atlas builtin:creature -o creature_atlas.obj --png creature_atlas.png");
   sub->callback([&ctx, args, sub, &action] {
-    for (const char* name : {"--png-size", "--signal-use", "--beta", "--lambda", "--chart-lambda",
-                             "--split-efficiency", "--max-geometric-l2", "--sae-res"})
-      if (sub->count(name) > 0) args->given.push_back(name);
+    args->given.record(sub, {"--png-size"});
+    args->given.record(sub, kSignalOptions);
     action = [&ctx, args] { run_atlas(ctx, *args); };
   });
 }

@@ -9,10 +9,10 @@
 
 #include "cli.h"
 #include "isochart/atlas.h"
-#include "isochart/stretch.h"
 #include "isochart/builtin.h"
 #include "isochart/error.h"
 #include "isochart/signal.h"
+#include "isochart/stretch.h"
 #include "mcgim/image_io.h"
 #include "mcgim/mcgim.h"
 #include "mcgim/psnr.h"
@@ -38,8 +38,7 @@ struct RemeshArgs {
   std::string signal;
   std::string signal_use = "param";
   bool keep_chart_sizes = false;
-  std::vector<std::string> given;  // options typed on the command line, to refuse ones that do nothing
-  bool has(const char* name) const { return std::find(given.begin(), given.end(), name) != given.end(); }
+  GivenOptions given;
 };
 
 nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
@@ -89,9 +88,9 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   if (!a.signal.empty() && !a.atlas.empty()) bad_option("--signal builds the atlas; it does not go with --atlas");
   if (a.signal_use != "param" && a.signal_use != "full") bad_option("--signal-use must be param or full");
   // An option that would be silently ignored is more likely a mistake than a wish.
-  if (a.has("--signal-use") && a.signal.empty()) bad_option("--signal-use goes with --signal");
-  if (a.has("--fit-passes") && a.no_optimize) bad_option("--fit-passes does nothing with --no-optimize");
-  if (a.has("--psnr-samples") && a.no_psnr) bad_option("--psnr-samples does nothing with --no-psnr");
+  if (a.given.has("--signal-use") && a.signal.empty()) bad_option("--signal-use goes with --signal");
+  if (a.given.has("--fit-passes") && a.no_optimize) bad_option("--fit-passes does nothing with --no-optimize");
+  if (a.given.has("--psnr-samples") && a.no_psnr) bad_option("--psnr-samples does nothing with --no-psnr");
   if (a.keep_chart_sizes && a.atlas.empty())
     bad_option("--keep-chart-sizes goes with --atlas (a signal atlas given as a file)");
   {
@@ -359,8 +358,7 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
       "  isocharts remesh ../shared/data/meshes/bunny.obj -o bunny_xatlas.ply --res 256 \\\n"
       "      --atlas ../shared/data/baseline_atlases/bunny_xatlas.obj");
   sub->callback([&ctx, args, sub, &action] {
-    for (const char* name : {"--signal-use", "--fit-passes", "--psnr-samples"})
-      if (sub->count(name) > 0) args->given.push_back(name);
+    args->given.record(sub, {"--signal-use", "--fit-passes", "--psnr-samples"});
     action = [&ctx, args] { run_remesh(ctx, *args); };
   });
 }
