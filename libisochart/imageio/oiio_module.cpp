@@ -218,21 +218,15 @@ int write_file(const char* path, int width, int height, int channels, int stride
   if (attributes)
     for (const char* const* a = attributes; a[0] && a[1]; a += 2) spec.attribute(a[0], a[1]);
   if (!spec.find_attribute("DateTime")) spec.attribute("DateTime", "");
-  auto fail = [&](const std::string& detail) {
+  auto fail = [&](const std::string& detail, int status = kIsochartsImageError) {
     out.reset();
     std::remove(path);
     OIIO::geterror();
-    return report(kIsochartsImageError, one_line(detail), message, message_size);
+    return report(status, one_line(detail), message, message_size);
   };
   // Refused before a byte is written: the format cannot hold this image (PNM and 4 channels,
   // ICO beyond 256x256). The directory was checked writable before the run: a usage error.
-  if (!out->open(path, spec)) {
-    const std::string detail = out->geterror();
-    out.reset();
-    std::remove(path);
-    OIIO::geterror();
-    return report(kIsochartsImageInputError, one_line(detail), message, message_size);
-  }
+  if (!out->open(path, spec)) return fail(out->geterror(), kIsochartsImageInputError);
   const auto xstride = static_cast<OIIO::stride_t>(sizeof(float)) * stride;
   if (!out->write_image(OIIO::TypeDesc::FLOAT, pixels, xstride)) return fail(out->geterror());
   if (!out->close()) return fail(out->geterror());

@@ -201,10 +201,7 @@ void write_image(const std::string& path, const Image& image) {
   const int status = m.write(tmp.c_str(), image.width, image.height, channels, image.channels,
                              image.pixels.data(), is_float ? 1 : 0, alpha, named ? names.c_str() : nullptr,
                              attributes.data(), message, sizeof message);
-  if (status != kIsochartsImageOk) {
-    fs::remove(tmp, ec);
-    untrack_temporary_file(tmp.string());
-  }
+  if (status != kIsochartsImageOk) remove_temporary_file(tmp.string());
   if (status == kIsochartsImageUnsupported)
     throw InputError(path, "unsupported image format '" + ext + "' (use .png, .jpg, .exr, .tif, ...)");
   if (status != kIsochartsImageOk) {
@@ -221,8 +218,7 @@ void write_image(const std::string& path, const Image& image) {
   fs::rename(tmp, target, ec);
   if (ec) {
     const std::string reason = ec.message();
-    fs::remove(tmp, ec);
-    untrack_temporary_file(tmp.string());
+    remove_temporary_file(tmp.string());
     throw Error(path + ": cannot write: " + reason);
   }
   untrack_temporary_file(tmp.string());

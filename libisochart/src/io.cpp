@@ -365,11 +365,6 @@ extern "C" void remove_tracked_and_reraise(int sig) {
   ::signal(sig, SIG_DFL);
   ::raise(sig);  // delivered when the handler returns: the process ends as killed by `sig`
 }
-
-void remove_temporary(const std::string& tmp) {
-  std::remove(tmp.c_str());
-  untrack_temporary_file(tmp);
-}
 }  // namespace
 
 void track_temporary_file(const std::string& path) {
@@ -390,6 +385,11 @@ void untrack_temporary_file(const std::string& path) {
       tracked_state[i].store(0, std::memory_order_release);
       return;
     }
+}
+
+void remove_temporary_file(const std::string& path) {
+  std::remove(path.c_str());
+  untrack_temporary_file(path);
 }
 
 void remove_temporary_files_on_interrupt() {
@@ -429,7 +429,7 @@ void write_file_atomic(const std::string& path, const std::string& data) {
   }
   if (ok) untrack_temporary_file(tmp);
   if (!ok) {
-    remove_temporary(tmp);
+    remove_temporary_file(tmp);
     // The file could be created, so the path was fine: the system failed (a full disk, an I/O
     // error), as when an image write fails: exit 1, not the bad-input 2.
     throw Error(path + ": cannot write: " + std::strerror(err));
@@ -444,7 +444,7 @@ OutputBatch::OutputBatch() {
 
 OutputBatch::~OutputBatch() {
   std::lock_guard<std::mutex> lock(batch_mutex);
-  for (const auto& [tmp, target] : staged_) remove_temporary(tmp);
+  for (const auto& [tmp, target] : staged_) remove_temporary_file(tmp);
   batch = nullptr;
   batch_inputs.clear();
 }
@@ -456,7 +456,7 @@ bool OutputBatch::stage(const std::string& tmp, const std::string& target) {
   // alike): the first would be lost, so the run is refused.
   for (auto& [t, g] : batch->staged_)
     if (g == target || same_file(g, target)) {
-      remove_temporary(tmp);
+      remove_temporary_file(tmp);
       throw InputError(target, "cannot write: given as two outputs of this run");
     }
   batch->staged_.emplace_back(tmp, target);

@@ -89,6 +89,8 @@ void write_file_atomic(const std::string& path, const std::string& data);
 /// written, just not tracked).
 void track_temporary_file(const std::string& path);
 void untrack_temporary_file(const std::string& path);
+/// Removes a tracked temporary file (a failed write) and stops tracking it.
+void remove_temporary_file(const std::string& path);
 
 /// For programs: on SIGINT, SIGTERM or SIGHUP (unless ignored when this is called), removes every
 /// tracked temporary file, then lets the signal end the process as it would have. The library
