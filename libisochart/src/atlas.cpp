@@ -54,9 +54,13 @@ double flipped_fraction(const detail::ChartGeometry& g, const std::vector<Vec2d>
 // faces the same way. CAD files fill flat polygons with fans of long slivers, on which
 // geodesics and their embedding are poor: a flat 200-gon came out as 6 charts with Linf 3.6.
 std::vector<Vec2d> planar_layout(const detail::ChartGeometry& g) {
+  std::vector<Vec3d> face_n(g.tris.size());  // area-weighted
   Vec3d n;
-  for (const Face& t : g.tris)
-    n += cross(g.positions[t[1]] - g.positions[t[0]], g.positions[t[2]] - g.positions[t[0]]);
+  for (std::size_t f = 0; f < g.tris.size(); ++f) {
+    const Face& t = g.tris[f];
+    face_n[f] = cross(g.positions[t[1]] - g.positions[t[0]], g.positions[t[2]] - g.positions[t[0]]);
+    n += face_n[f];
+  }
   const double len = norm(n);
   if (!(len > 0)) return {};
   n = n / len;
@@ -65,9 +69,8 @@ std::vector<Vec2d> planar_layout(const detail::ChartGeometry& g) {
   const Vec3d& o = g.positions[0];
   for (const Vec3d& p : g.positions)
     if (std::abs(dot(p - o, n)) > 1e-6 * size) return {};
-  for (const Face& t : g.tris)
-    if (!(dot(cross(g.positions[t[1]] - g.positions[t[0]], g.positions[t[2]] - g.positions[t[0]]), n) > 0))
-      return {};
+  for (const Vec3d& fn : face_n)
+    if (!(dot(fn, n) > 0)) return {};
   // Any orthonormal basis (e1, e2) with e1 × e2 = n keeps the winding.
   const Vec3d a = std::abs(n.x) < 0.9 ? Vec3d{1, 0, 0} : Vec3d{0, 1, 0};
   const Vec3d e1 = normalized(cross(a, n)), e2 = cross(n, e1);
@@ -333,13 +336,14 @@ class Builder {
       out.chart.geometry = std::move(g);
       return out;
     }
-    const bool disk_like = topo.genus() == 0 && !topo.boundary_loops().empty();
-    if (disk_like && !force_split) {
+    // A disk may be accepted whole, from its own plane when it is flat, else from its embedding.
+    const bool may_accept = topo.genus() == 0 && !topo.boundary_loops().empty() && !force_split;
+    if (may_accept) {
       const std::vector<Vec2d> flat = planar_layout(g);
       if (!flat.empty() && try_accept(g, topo, flat, po, out)) return out;
     }
     Embedding emb = embed(g, out.times, landmarks_for(g, faces));
-    if (disk_like && !force_split) {
+    if (may_accept) {
       if (!work.alone) {
         if (try_accept(g, topo, detail::isomap_uv(emb), po, out)) return out;
       } else {

@@ -66,7 +66,7 @@ constexpr std::size_t kMaxEarClipping = 2000;
 bool triangulate_cdt(const std::vector<K::Point_2>& p, const std::vector<int>& corners,
                      std::vector<std::array<int, 3>>& out) {
   using Vb = CGAL::Triangulation_vertex_base_with_info_2<int, K>;
-  using Fbi = CGAL::Triangulation_face_base_with_info_2<int, K>;  // 1 inside, 0 outside
+  using Fbi = CGAL::Triangulation_face_base_with_info_2<int, K>;  // nesting level, -1 unvisited
   using Fb = CGAL::Constrained_triangulation_face_base_2<K, Fbi>;
   using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
   using Cdt = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::No_constraint_intersection_tag>;
