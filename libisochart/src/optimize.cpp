@@ -326,46 +326,41 @@ class Optimizer {
       double lo, hi;
       kernel_segment(v, best_x, d, lo, hi);
       if (!(hi > lo) || hi - lo < 1e-300) continue;
-      auto eval = [&](double t, double& s1, double& s2, double& pen) {
-        if (!ring_terms(best_x + d * t, s1, s2, pen)) return kInf;
-        if (!boundary_ok(v, best_x + d * t)) return kInf;
-        return objective(s1, s2, pen, r1, r2, rpen);
+      // An evaluated point keeps its ring sums, so the winner needs no second evaluation.
+      struct Point {
+        double t, f, s1, s2, pen;
+      };
+      auto eval = [&](double t) {
+        Point p{t, kInf, 0, 0, 0};
+        if (ring_terms(best_x + d * t, p.s1, p.s2, p.pen) && boundary_ok(v, best_x + d * t))
+          p.f = objective(p.s1, p.s2, p.pen, r1, r2, rpen);
+        return p;
       };
       // Coarse samples, then golden-section refinement around the best one.
       constexpr int kSamples = 5;
-      double ts[kSamples + 1], fs[kSamples + 1];
+      Point coarse[kSamples + 1];
       int bi = -1;
-      double s1, s2, pen;
       for (int i = 0; i <= kSamples; ++i) {
-        ts[i] = lo + (hi - lo) * i / kSamples;
-        fs[i] = eval(ts[i], s1, s2, pen);
-        if (bi < 0 || fs[i] < fs[bi]) bi = i;
+        coarse[i] = eval(lo + (hi - lo) * i / kSamples);
+        if (bi < 0 || coarse[i].f < coarse[bi].f) bi = i;
       }
-      double a = ts[std::max(bi - 1, 0)], b = ts[std::min(bi + 1, kSamples)];
+      double a = coarse[std::max(bi - 1, 0)].t, b = coarse[std::min(bi + 1, kSamples)].t;
       constexpr double g = 0.6180339887498949;
-      double c = b - g * (b - a), e = a + g * (b - a);
-      double fc = eval(c, s1, s2, pen), fe = eval(e, s1, s2, pen);
+      Point c = eval(b - g * (b - a)), e = eval(a + g * (b - a));
       for (int it = 0; it < 8; ++it) {
-        if (fc < fe) {
-          b = e;
+        if (c.f < e.f) {
+          b = e.t;
           e = c;
-          fe = fc;
-          c = b - g * (b - a);
-          fc = eval(c, s1, s2, pen);
+          c = eval(b - g * (b - a));
         } else {
-          a = c;
+          a = c.t;
           c = e;
-          fc = fe;
-          e = a + g * (b - a);
-          fe = eval(e, s1, s2, pen);
+          e = eval(a + g * (b - a));
         }
       }
-      double t = fc < fe ? c : e;
-      double ft = eval(t, s1, s2, pen);
-      if (fs[bi] < ft) {
-        t = ts[bi];
-        ft = eval(t, s1, s2, pen);
-      }
+      Point won = c.f < e.f ? c : e;
+      if (coarse[bi].f < won.f) won = coarse[bi];
+      const double t = won.t, ft = won.f, s1 = won.s1, s2 = won.s2, pen = won.pen;
       const double prev = best;
       if (ft < best) {
         best = ft;
