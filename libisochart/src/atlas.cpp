@@ -588,6 +588,17 @@ class Builder {
       return nbs;
     };
     auto is_small = [&](int c) { return charts[c]->geometry.num_faces() <= o_.merge_max_fraction * total_faces; };
+    // Attempts nobody will ask for: those not started are dropped, running ones told to stop.
+    auto abandon_ahead = [&] {
+      for (auto& [k, slot] : ahead) {
+        int queued = 0;
+        if (!slot->state.compare_exchange_strong(queued, 3)) slot->cancel.store(true);
+      }
+    };
+    // Merging a million-face mesh takes half a minute: it reports its rounds (the share of
+    // small charts looked at so far) and may be cancelled between them.
+    int rounds = 0;
+    double reported = 0;
     bool progress = true;
     while (progress && static_cast<int>(charts.size()) > min_charts) {
       progress = false;
@@ -596,6 +607,14 @@ class Builder {
       for (int c = 0; c < static_cast<int>(charts.size()); ++c)
         if (!tried[c] && is_small(c)) smalls.push_back(c);
       if (smalls.empty()) break;
+      reported = std::max(reported, static_cast<double>(rounds) / static_cast<double>(rounds + smalls.size()));
+      ++rounds;
+      try {
+        report(progress_, Stage::Merging, reported);
+      } catch (...) {
+        abandon_ahead();
+        throw;  // the task group waits for the running attempts, which stop early
+      }
       std::stable_sort(smalls.begin(), smalls.end(), [&](int a, int b) {
         return charts[a]->geometry.num_faces() < charts[b]->geometry.num_faces();
       });
@@ -669,11 +688,7 @@ class Builder {
         progress = std::find(tried.begin(), tried.end(), 0) != tried.end();
       }
     }
-    // Attempts nobody will ask for: those not started are dropped, running ones told to stop.
-    for (auto& [k, slot] : ahead) {
-      int queued = 0;
-      if (!slot->state.compare_exchange_strong(queued, 3)) slot->cancel.store(true);
-    }
+    abandon_ahead();
     background.wait();
     done.clear();
     for (auto& c : charts) done.push_back(*c);

@@ -3,6 +3,7 @@
 #include <tbb/global_control.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 
 #include "isochart/builtin.h"
@@ -317,4 +318,31 @@ TEST_CASE("skip_packing keeps every chart's own layout, apart, in the unit squar
   // The caller packs later.
   pack_atlas(torus, loose, o.pack);
   check_atlas(torus, loose, o);
+}
+
+TEST_CASE("merging reports its rounds and can be cancelled between them", "[atlas]") {
+  // Every chart of the sphere counts as small, so each of them gets a merging round.
+  const Mesh sphere = make_builtin("sphere");
+  AtlasOptions o;
+  o.merge_max_fraction = 1;
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    std::vector<double> fractions;  // Merging is reported from the calling thread only
+    const Progress record = [&](Stage s, double f) {
+      if (s == Stage::Merging) fractions.push_back(f);
+      return true;
+    };
+    const Atlas a = build_atlas(sphere, o, record);
+    INFO(threads << " threads: " << a.stats.charts_before_merge << " charts before merging, " << a.num_charts()
+                 << " after, " << fractions.size() << " rounds");
+    REQUIRE(fractions.size() >= static_cast<size_t>(a.num_charts()));
+    CHECK(std::is_sorted(fractions.begin(), fractions.end()));
+    CHECK(fractions.front() == 0);
+    CHECK(fractions.back() < 1);
+    // Cancelled at the second round, while attempts computed ahead may be running.
+    int rounds = 0;
+    const Progress stop = [&](Stage s, double) { return s != Stage::Merging || ++rounds < 2; };
+    CHECK_THROWS_AS(build_atlas(sphere, o, stop), Cancelled);
+    CHECK(rounds == 2);
+  }
 }
