@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
+#include <string>
 #include <deque>
 #include <limits>
 #include <numeric>
@@ -23,6 +25,30 @@
 #include "synth/exemplar.h"
 
 namespace synth {
+
+namespace {
+
+// printf into a string of whatever length the text needs (a scale of 1e-300 printed a
+// 300-digit size and cut the message's advice off at a fixed buffer's end).
+[[gnu::format(printf, 1, 2)]] std::string format(const char* fmt, ...) {
+  va_list args, again;
+  va_start(args, fmt);
+  va_copy(again, args);
+  const int n = std::vsnprintf(nullptr, 0, fmt, args);
+  va_end(args);
+  std::string out(n > 0 ? static_cast<std::size_t>(n) : 0, '\0');
+  if (n > 0) std::vsnprintf(out.data(), out.size() + 1, fmt, again);
+  va_end(again);
+  return out;
+}
+
+// Printed rounded up to four digits, so that the value shown is one that works.
+double round_up_4(double x) {
+  const double digits = std::pow(10.0, 3 - std::floor(std::log10(x)));
+  return std::ceil(x * digits - 1e-6) / digits;
+}
+
+}  // namespace
 
 using isochart::Image;
 using isochart::Vec2d;
@@ -559,19 +585,12 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
         res.scale = min_scale;
       } else {
         const double f = res.scale * finest_texel;
-        // Printed rounded up to four digits, so that the value shown is one that works.
-        const double digits = std::pow(10.0, 3 - std::floor(std::log10(min_scale)));
-        const double shown_scale = std::ceil(min_scale * digits - 1e-6) / digits;
-        const double pdigits = std::pow(10.0, 3 - std::floor(std::log10(min_factor)));
-        const double shown_factor = std::ceil(min_factor * pdigits - 1e-6) / pdigits;
-        char buf[400];
-        std::snprintf(buf, sizeof buf,
-                      "exemplar scale too small: it would magnify the %dx%d exemplar %.4g times, to %.0fx%.0f "
-                      "pixels, more than both its own size and the finest level's %.0f samples; the smallest "
-                      "scale is %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel)",
-                      exemplar.width, exemplar.height, 1 / f, exemplar.width / f, exemplar.height / f, level_pixels,
-                      shown_scale, shown_factor);
-        throw isochart::InputError("", buf);
+        throw isochart::InputError(
+            "", format("exemplar scale too small: it would magnify the %dx%d exemplar %.4g times, to %.4gx%.4g "
+                       "pixels, more than both its own size and the finest level's %.0f samples; the smallest "
+                       "scale is %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel)",
+                       exemplar.width, exemplar.height, 1 / f, exemplar.width / f, exemplar.height / f,
+                       level_pixels, round_up_4(min_scale), round_up_4(min_factor)));
       }
     }
   }
@@ -588,14 +607,36 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
       if (o.scale <= 0 && o.pixels_per_texel <= 0) {
         res.scale = max_scale;
       } else {
-        char buf[400];
-        std::snprintf(
-            buf, sizeof buf,
-            "exemplar scale too large: a texel of the finest level would cover %.4g exemplar pixels, "
-            "shrinking the %dx%d exemplar below 4 pixels across; the largest scale is %.4g exemplar "
-            "pixels per unit length (%.4g exemplar pixels per texel)",
-            f, exemplar.width, exemplar.height, max_scale, max_factor);
-        throw isochart::InputError("", buf);
+        throw isochart::InputError(
+            "", format("exemplar scale too large: a texel of the finest level would cover %.4g exemplar pixels, "
+                       "shrinking the %dx%d exemplar below 4 pixels across; the largest scale is %.4g exemplar "
+                       "pixels per unit length (%.4g exemplar pixels per texel)",
+                       f, exemplar.width, exemplar.height, max_scale, max_factor));
+      }
+    }
+  }
+
+  // The exemplar as searched at the finest level (one pixel per texel) costs about 1.2 KB of
+  // neighbourhood vectors and search tree per pixel: a 4096² photograph at one pixel per texel
+  // reached 17 GB on a 1,536-face mesh before it was stopped, 1024² took 1.3 GB and 68 s. Above
+  // 1024² pixels the default scale shrinks the exemplar, and a scale asked for is refused.
+  if (pyramid[0].stats.texel_size > 0) {
+    constexpr double kMaxSearchedPixels = 1024.0 * 1024.0;
+    const double f = res.scale * pyramid[0].stats.texel_size;  // exemplar pixels per texel
+    const double searched = double(exemplar.width) * exemplar.height / (f * f);
+    if (searched > kMaxSearchedPixels * (1 + 1e-9)) {
+      const double min_factor = std::sqrt(double(exemplar.width) * exemplar.height / kMaxSearchedPixels);
+      const double min_scale = min_factor / pyramid[0].stats.texel_size;
+      if (o.scale <= 0 && o.pixels_per_texel <= 0) {
+        res.scale = min_scale;
+      } else {
+        throw isochart::InputError(
+            "", format("exemplar too large at this scale: the %dx%d exemplar at %.4g exemplar pixels per texel "
+                       "would be searched as %.4g pixels (about %.2g GB); at most %.0f (1024x1024) are: use a "
+                       "scale of at least %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel) "
+                       "or a smaller exemplar",
+                       exemplar.width, exemplar.height, f, searched, searched * 1.2e3 / 1e9, kMaxSearchedPixels,
+                       round_up_4(min_scale), round_up_4(min_factor)));
       }
     }
   }

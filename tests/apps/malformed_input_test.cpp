@@ -423,6 +423,12 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
                              Catch::Contains("the smallest scale is") && Catch::EndsWith("pixels per texel)\n"));
   CHECK(std::count(scale_line.begin(), scale_line.end(), '\n') == 1);
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt"});
+  // A tiny scale printed the magnified size with all its 300 digits and lost the advice at the
+  // end of a fixed buffer.
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --scale 1e-300",
+                err) == 2);
+  CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --scale 1e-300: exemplar scale too small") &&
+                         Catch::Contains("the smallest scale is") && Catch::EndsWith("pixels per texel)\n"));
   // The other end: a scale that would shrink the exemplar below 4 pixels across ran capped at
   // that and reported the scale asked for.
   CHECK(

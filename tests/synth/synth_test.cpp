@@ -621,3 +621,23 @@ TEST_CASE("the atlas texture reads the exemplar where the samples' positions con
   const auto other_level = cube_pyramid(atlas, {{40, 40}, {20, 20}});
   CHECK_THROWS_AS(synth::transfer_to_atlas(atlas, other_level[0], r.texture, size, &r, &ex), isochart::InputError);
 }
+
+TEST_CASE("an exemplar too large to search at the scale asked for is refused with the scale that works",
+          "[synth]") {
+  // 1100² pixels at one exemplar pixel per texel: 1.21 M pixels to search, over the 1024² that
+  // fit in about 1.3 GB (a 4096² photograph reached 17 GB before it was stopped).
+  const isochart::Mesh atlas = mcgim_test::cube_atlas(6);
+  const auto pyramid = cube_pyramid(atlas, {{48, 48}, {24, 24}});
+  const Image big = synth::make_exemplar("noise", 1100);
+  synth::SynthOptions so;
+  so.pixels_per_texel = 1;
+  CHECK_THROWS_WITH(synth::synthesize(atlas, pyramid, big, so),
+                    Catch::StartsWith("exemplar too large at this scale: the 1100x1100 exemplar at 1 exemplar pixel") &&
+                        Catch::Contains("(1.075 exemplar pixels per texel)"));
+  // The scale it names works.
+  so.pixels_per_texel = 1.075;
+  so.full_passes = 0;  // the search tree is built either way; the passes only take time
+  so.coarsest_passes = 0;
+  const synth::SynthResult r = synth::synthesize(atlas, pyramid, big, so);
+  CHECK(r.levels[0].exemplar_width * r.levels[0].exemplar_height <= 1024 * 1024);
+}
