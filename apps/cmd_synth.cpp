@@ -188,7 +188,10 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   std::ostringstream t;
   t << a.input << " with " << a.exemplar << ": " << built.num_charts() << " charts, levels";
   for (int lv : a.levels) t << " " << lv;
-  t << "\n  seam error " << r.seam_error << ", match error " << r.match_error << ", texel-scale spread "
+  t << "\n  seam error ";
+  if (std::isnan(r.seam_error)) t << "none (no seam)";
+  else t << r.seam_error;
+  t << ", match error " << r.match_error << ", texel-scale spread "
     << r.texel_scale_spread << "\n  wrote " << stem << ".glb/.obj/.png and " << stem << "_mcgim.glb/.obj/.png in "
     << j["seconds"].get<double>() << " s\n";
   ctx.emit(j, t.str());

@@ -204,7 +204,7 @@ Tap LevelGeometry::locate(Vec2d xy, int chart, int frame, double a, double b) co
   Vec3d dir = w / remaining;
   const double step = 0.5 * m.texel_level;
   int best = frame;
-  for (int iter = 0; remaining > 1e-12 && iter < 1000; ++iter) {
+  for (int iter = 0; remaining > 1e-9 * step && iter < 1000; ++iter) {
     const double h = std::min(remaining, step);
     remaining -= h;
     const Vec3d q = p + dir * h;

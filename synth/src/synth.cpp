@@ -1154,7 +1154,11 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     res.seam_pairs = static_cast<long long>(seam_n);
     const double ms = seam_n > 0 ? seam / seam_n : 0, mi = inner_n > 0 ? inner / inner_n : 0;
     // Differences below float rounding of colours count as none.
-    res.seam_error = mi > 1e-6 ? ms / mi : (ms > 1e-6 ? std::numeric_limits<double>::infinity() : 0.0);
+    // No tap crossed a seam: there is no seam error to measure (NaN, null in the JSON), not a
+    // perfect one.
+    res.seam_error = seam_n == 0 ? std::numeric_limits<double>::quiet_NaN()
+                     : mi > 1e-6 ? ms / mi
+                                 : (ms > 1e-6 ? std::numeric_limits<double>::infinity() : 0.0);
     double s1 = 0, s2 = 0;
     long long cnt = 0;
     for (int s = 0; s < g.width * g.height; ++s) {

@@ -641,3 +641,21 @@ TEST_CASE("an exemplar too large to search at the scale asked for is refused wit
   const synth::SynthResult r = synth::synthesize(atlas, pyramid, big, so);
   CHECK(r.levels[0].exemplar_width * r.levels[0].exemplar_height <= 1024 * 1024);
 }
+
+TEST_CASE("taps cross seams whatever the mesh's units", "[synth]") {
+  // The walk across a seam stopped once the offset left was below 1e-12 units: on a mesh whose
+  // texels are that small no tap crossed, and the seam error read a perfect 0.
+  isochart::Mesh atlas = mcgim_test::cube_atlas(6);
+  const auto pyramid = cube_pyramid(atlas, {{48, 48}, {24, 24}});
+  synth::SynthOptions so;
+  so.scale = 32;
+  const Image ex = synth::make_exemplar("weave", 64);
+  const synth::SynthResult one = synth::synthesize(atlas, pyramid, ex, so);
+  for (auto& p : atlas.positions) p = p * 1e-13;
+  const auto tiny_pyramid = cube_pyramid(atlas, {{48, 48}, {24, 24}});
+  so.scale = 32e13;
+  const synth::SynthResult tiny = synth::synthesize(atlas, tiny_pyramid, ex, so);
+  REQUIRE(one.seam_pairs > 0);
+  CHECK(tiny.seam_pairs == one.seam_pairs);
+  CHECK(tiny.seam_error == Approx(one.seam_error).epsilon(0.05));
+}

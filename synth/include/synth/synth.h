@@ -152,7 +152,8 @@ struct SynthResult {
   double match_error = 0;
   /// Mean colour difference between samples two texels apart across a zippered seam, divided
   /// by the same figure for pairs inside charts (1 = seams invisible). 0 when both are 0
-  /// (a constant texture); +inf when only the interior one is 0.
+  /// (a constant texture); +inf when only the interior one is 0; NaN when no pair crosses a
+  /// seam (one chart without seams).
   double seam_error = 0;
   long long seam_pairs = 0;
   /// Standard deviation over finest-level samples of log(local texel size on the surface).
