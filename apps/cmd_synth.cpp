@@ -4,6 +4,7 @@
 // `isocharts exemplar NAME -o FILE.png` (hidden): writes one of the procedural exemplars.
 
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
 #include "cli.h"
@@ -78,7 +79,16 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
     bad_option("--coarse-neighborhood must be odd (1, 3, 5, ...), not " + std::to_string(a.coarse_neighborhood));
   if (a.scale > 0 && a.pixels_per_texel > 0) bad_option("--scale and --pixels-per-texel are exclusive");
   check_levels(a.levels);
-  const isochart::Image exemplar = synth::exemplar_from(a.exemplar);
+  long long clipped = 0;
+  const isochart::Image exemplar = synth::exemplar_from(a.exemplar, &clipped);
+  // An HDR exemplar comes out mostly white or black; the user should hear why.
+  if (clipped > 0) {
+    const double share = 100.0 * clipped / (3.0 * exemplar.width * exemplar.height);
+    std::ostringstream w;
+    w << clipped << " colour values (" << std::setprecision(3) << share
+      << " %) lie outside [0, 1] and are clipped; scale the image into [0, 1] to keep them";
+    ctx.warn(a.exemplar, w.str());
+  }
 
   const std::string prefix = "builtin:";
   const isochart::Mesh input = a.input.rfind(prefix, 0) == 0 ? isochart::make_builtin(a.input.substr(prefix.size()))

@@ -16,7 +16,8 @@ namespace synth {
 using isochart::Image;
 using isochart::InputError;
 
-Image to_rgb_exemplar(const Image& image, const std::string& name) {
+Image to_rgb_exemplar(const Image& image, const std::string& name, long long* clipped) {
+  if (clipped) *clipped = 0;
   if (image.channels < 1 || image.channels > 4)
     throw InputError(name, "exemplar has " + std::to_string(image.channels) +
                                " channels; expected grey, grey+alpha, RGB or RGBA");
@@ -63,14 +64,15 @@ Image to_rgb_exemplar(const Image& image, const std::string& name) {
           throw InputError(name, "exemplar pixel (" + std::to_string(x) + "," + std::to_string(y) +
                                      ") is not a finite number");
         rgb.at(x, y, c) = std::clamp(v, 0.0f, 1.0f);
+        if (clipped && rgb.at(x, y, c) != v) ++*clipped;
       }
     }
   }
   return rgb;
 }
 
-Image load_exemplar(const std::string& path) {
-  return to_rgb_exemplar(isochart::read_image(path), path);
+Image load_exemplar(const std::string& path, long long* clipped) {
+  return to_rgb_exemplar(isochart::read_image(path), path, clipped);
 }
 
 ExemplarLevel resample_exemplar(const Image& rgb, double factor) {
@@ -324,10 +326,11 @@ Image make_exemplar(const std::string& name, int size, std::uint64_t seed) {
   return img;
 }
 
-Image exemplar_from(const std::string& spec) {
+Image exemplar_from(const std::string& spec, long long* clipped) {
   const std::string prefix = "builtin:";
+  if (clipped) *clipped = 0;
   if (spec.rfind(prefix, 0) == 0) return make_exemplar(spec.substr(prefix.size()));
-  return load_exemplar(spec);
+  return load_exemplar(spec, clipped);
 }
 
 }  // namespace synth

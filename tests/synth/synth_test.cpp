@@ -123,6 +123,22 @@ TEST_CASE("bad exemplars are InputErrors", "[synth]") {
   Image two(8, 8, 2, 0.5f);
   two.channel_names = {"U", "V"};
   CHECK_THROWS_WITH(synth::to_rgb_exemplar(two, "uv.exr"), Catch::Contains("2 colour channels (U,V)"));
+  // Values outside [0, 1] (an HDR EXR) are clipped and counted, so the CLI can warn: such an
+  // exemplar came out all white without a word.
+  Image hdr(8, 8, 3, 0.5f);
+  hdr.at(1, 1, 0) = 20.0f;
+  hdr.at(2, 1, 2) = -1.0f;
+  long long clipped = -1;
+  const Image h = synth::to_rgb_exemplar(hdr, "hdr", &clipped);
+  CHECK(clipped == 2);
+  CHECK(h.at(1, 1, 0) == 1.0f);
+  CHECK(h.at(2, 1, 2) == 0.0f);
+  isochart::write_image(tmp / "hdr.exr", hdr);
+  CHECK(tmp.run("--json synth builtin:sphere --levels 64,32 --exemplar " + tmp / "hdr.exr" + " -o " +
+                tmp / "hdr.glb") == 0);
+  CHECK_THAT(tmp.stderr_text(), Catch::Contains("hdr.exr: 2 colour values (1.04 %) lie outside [0, 1] and are clipped"));
+  synth::to_rgb_exemplar(Image(8, 8, 3, 1.0f), "white", &clipped);
+  CHECK(clipped == 0);
   // The CLI turns them into exit code 2 naming the file.
   CHECK(tmp.run("synth builtin:sphere --exemplar " + tmp / "transparent.png" + " -o " + tmp / "out.glb") == 2);
   CHECK(tmp.stderr_text().find("transparent.png") != std::string::npos);

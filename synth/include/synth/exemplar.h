@@ -14,14 +14,15 @@ namespace synth {
 
 /// Reads an exemplar through OpenImageIO (PNG, JPG, EXR, ...) and returns it as 3-channel RGB
 /// in [0, 1]: greyscale is replicated, an alpha channel must be opaque (every value ≥ 0.999)
-/// and is dropped; EXR values are clamped to [0, 1].
+/// and is dropped; EXR values are clamped to [0, 1], and `clipped` (when given) receives how
+/// many colour values were, so that callers can say so.
 /// \throw isochart::InputError(path, ...) for a missing or unreadable file, an image smaller
 ///        than 4×4, transparency, or a channel count other than 1–4.
-isochart::Image load_exemplar(const std::string& path);
+isochart::Image load_exemplar(const std::string& path, long long* clipped = nullptr);
 
 /// Checks an in-memory exemplar the same way and converts it to RGB.
 /// \throw isochart::InputError(name, ...) as load_exemplar.
-isochart::Image to_rgb_exemplar(const isochart::Image& image, const std::string& name);
+isochart::Image to_rgb_exemplar(const isochart::Image& image, const std::string& name, long long* clipped = nullptr);
 
 /// The exemplar resampled so that one of its pixels covers `factor` pixels of the original
 /// (factor > 1 shrinks with a Gaussian pre-filter of σ = 0.5·factor pixels, factor ≤ 1
@@ -65,7 +66,7 @@ std::vector<std::string> exemplar_names();
 /// \throw isochart::InputError("builtin:NAME", ...) for an unknown name or size < 8.
 isochart::Image make_exemplar(const std::string& name, int size = 128, std::uint64_t seed = 1);
 
-/// "builtin:NAME" → make_exemplar(NAME), anything else → load_exemplar(path).
-isochart::Image exemplar_from(const std::string& spec);
+/// "builtin:NAME" → make_exemplar(NAME), anything else → load_exemplar(path, clipped).
+isochart::Image exemplar_from(const std::string& spec, long long* clipped = nullptr);
 
 }  // namespace synth
