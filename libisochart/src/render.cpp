@@ -409,7 +409,7 @@ std::vector<Vec3d> chart_colors(const Mesh& mesh, const std::vector<int>& face_c
   return colors;
 }
 
-Image render_mesh(const Mesh& mesh, const RenderOptions& options) {
+Image render_mesh(const Mesh& input, const RenderOptions& options) {
   const RenderOptions& o = options;
   if (o.views < 1 || o.views > 8)
     throw InputError("", "views must be between 1 and 8, not " + std::to_string(o.views));
@@ -419,7 +419,24 @@ Image render_mesh(const Mesh& mesh, const RenderOptions& options) {
   if (o.width < o.views)
     throw InputError("", "image width " + std::to_string(o.width) + " is too small for " +
                              std::to_string(o.views) + " views");
-  check_mesh(mesh);
+  check_mesh(input);
+  // Drawn around the origin at unit size: the camera stood at least 1e-12 units away, so a
+  // mesh 1e-28 across came out blank (its coordinates lost against the eye's), and 1e-14 across
+  // already had noisy edges. Shading, chart colours and UVs do not depend on position or size.
+  Mesh mesh = input;
+  {
+    Vec3d lo = mesh.positions[mesh.faces[0][0]], hi = lo;
+    for (const Face& f : mesh.faces)
+      for (int v : f) {
+        const Vec3d& p = mesh.positions[v];
+        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+      }
+    const Vec3d centre = (lo + hi) * 0.5;
+    const double half = 0.5 * norm(hi - lo);
+    const double unit = half > 0 && std::isfinite(1 / half) ? 1 / half : 1.0;
+    for (Vec3d& p : mesh.positions) p = (p - centre) * unit;
+  }
 
   Shared s;
   s.mesh = &mesh;

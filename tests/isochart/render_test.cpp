@@ -122,6 +122,26 @@ TEST_CASE("render of a sphere covers the centre and leaves the corners white", "
   CHECK(hue_clusters(img) == 0);
 }
 
+TEST_CASE("a mesh renders the same at any size and place", "[render]") {
+  // The camera stood at least 1e-12 units from the model: a sphere 1e-28 across came out
+  // blank, one 1e-14 across with noisy edges.
+  RenderOptions o;
+  o.width = 160;
+  o.height = 120;
+  const Mesh sphere = make_builtin("sphere");
+  const Image ref = render_mesh(sphere, o);
+  for (const auto& [scale, offset] : {std::pair{1e-28, 0.0}, {1e-14, 0.0}, {1e12, 0.0}, {1.0, 1e9}}) {
+    Mesh m = sphere;
+    for (Vec3d& p : m.positions) p = p * scale + Vec3d{offset, 0, 0};
+    const Image img = render_mesh(m, o);
+    REQUIRE(img.pixels.size() == ref.pixels.size());
+    double diff = 0;
+    for (std::size_t i = 0; i < img.pixels.size(); ++i) diff += std::abs(img.pixels[i] - ref.pixels[i]);
+    INFO("scale " << scale << ", offset " << offset);
+    CHECK(diff / img.pixels.size() < 0.002);
+  }
+}
+
 TEST_CASE("several views are composed side by side", "[render]") {
   RenderOptions o;
   o.views = 4;
