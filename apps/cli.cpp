@@ -54,6 +54,14 @@ void Context::check_paths(const std::vector<std::string>& inputs, std::vector<st
     if (!S_ISDIR(st.st_mode)) throw isochart::InputError(out, "cannot write: " + dir + " is not a directory");
     if (::access(dir.c_str(), W_OK) != 0)
       throw isochart::InputError(out, "cannot write: " + std::string(std::strerror(errno)));
+    // Nor is a name the file system cannot hold found before the end.
+    const std::string name = slash == std::string::npos ? out : out.substr(slash + 1);
+    const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+    const std::size_t limit = name_max > 0 ? static_cast<std::size_t>(name_max) : 255;
+    if (name.size() > limit)
+      throw isochart::InputError(out, "cannot write: the file name has " + std::to_string(name.size()) +
+                                          " bytes, more than the " + std::to_string(limit) +
+                                          " the directory allows");
   }
 }
 

@@ -174,11 +174,8 @@ void write_image(const std::string& path, const Image& image) {
                                                : "output directory does not exist");
   const IsochartsImageModule& m = image_module();
 
-  // Same directory (so the rename is atomic), same extension (so the writer picks the
-  // format), unique per process and call.
-  static std::atomic<unsigned> counter{0};
-  const fs::path tmp = dir / ("." + target.stem().string() + ".tmp" + std::to_string(::getpid()) + "-" +
-                              std::to_string(counter++) + fs::path(path).extension().string());
+  // Named with the extension asked for, so the writer picks that format.
+  const fs::path tmp = temporary_path(target.string(), fs::path(path).extension().string());
 
   const bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".pfm";
   int channels = image.channels;

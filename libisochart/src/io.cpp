@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <mutex>
 #include <set>
 
@@ -23,6 +24,8 @@
 #include "isochart/error.h"
 
 namespace isochart {
+
+namespace fs = std::filesystem;
 
 namespace io_detail {
 
@@ -203,7 +206,7 @@ MeshFormat format_from_path(const std::string& path) {
   if (ext == "gltf") return MeshFormat::Gltf;
   if (ext == "glb") return MeshFormat::Glb;
   throw InputError(
-      path, "unknown mesh format " + quoted("." + ext) + " (expected .obj, .off, .ply, .gltf or .glb)");
+      path, "unknown mesh format " + io_detail::quoted("." + ext) + " (expected .obj, .off, .ply, .gltf or .glb)");
 }
 
 RawMesh read_raw_mesh(const std::string& path, const LoadOptions& options) {
@@ -403,12 +406,25 @@ void remove_temporary_files_on_interrupt() {
   }
 }
 
-void write_file_atomic(const std::string& path, const std::string& data) {
+std::string temporary_path(const std::string& target, const std::string& extension) {
   // pid + counter makes the name unique across processes and threads writing beside each
   // other; the same directory makes the final rename atomic.
   static std::atomic<unsigned> counter{0};
+  const fs::path t(target);
+  const std::string& ext = extension;
+  std::string base = ext.empty() ? t.filename().string() : "." + t.stem().string();
+  const std::string tag = ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+  // A file name has at most 255 bytes: an output named with 240 of them was refused ("File name
+  // too long") after the whole run, for its temporary file's name alone.
+  constexpr std::size_t kNameMax = 255;
+  if (base.size() + tag.size() + ext.size() > kNameMax)
+    base.resize(kNameMax > tag.size() + ext.size() ? kNameMax - tag.size() - ext.size() : 0);
+  return (t.parent_path() / (base + tag + ext)).string();
+}
+
+void write_file_atomic(const std::string& path, const std::string& data) {
   const std::string target = output_target(path);
-  const std::string tmp = target + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
+  const std::string tmp = temporary_path(target);
   track_temporary_file(tmp);
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) {

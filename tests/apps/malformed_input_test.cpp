@@ -559,3 +559,25 @@ TEST_CASE("info shows the triangle counts its topology is of when the file has p
   CHECK(text.find("used                 8 vertices, 12 triangles, 18 edges") != std::string::npos);
   CHECK(text.find("euler characteristic 2\n") != std::string::npos);
 }
+
+TEST_CASE("outputs with names of up to 255 bytes are written", "[cli]") {
+  // The temporary file beside the output is named after it: with a 245-byte name it went over
+  // the 255-byte limit and the run failed ("File name too long") after all its work.
+  TempDir tmp("long_names");
+  const fs::path err = tmp.path / "err.txt";
+  const std::string stem(251, 'L');
+  const fs::path obj = tmp.path / (stem + ".obj"), png = tmp.path / (stem + ".png");
+  CHECK(run_cli("-q atlas builtin:face -o '" + obj.string() + "' --png '" + png.string() + "'", err) == 0);
+  CHECK(read_bytes(err).empty());
+  CHECK(entries(tmp.path) == std::vector<std::string>{stem + ".obj", stem + ".png", "err.txt"});
+  // A longer name is refused before any work (it failed at the very end, after printing
+  // "wrote"), for derived names too (synth's OUT_mcgim.png).
+  const std::string too_long(252, 'M');
+  CHECK(run_cli("-q atlas builtin:face -o '" + (tmp.path / (too_long + ".obj")).string() + "'", err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::EndsWith("cannot write: the file name has 256 bytes, more than the 255 the "
+                                              "directory allows\n"));
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / (std::string(246, 'S') + ".glb")).string() + "'", err) ==
+        2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("_mcgim.glb: cannot write: the file name has 256 bytes"));
+  CHECK(entries(tmp.path) == std::vector<std::string>{stem + ".obj", stem + ".png", "err.txt"});
+}

@@ -83,6 +83,11 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
 /// \throw InputError(path, "cannot write: REASON").
 void write_file_atomic(const std::string& path, const std::string& data);
 
+/// A fresh temporary file name beside `target` (same directory, so the rename is atomic), unique
+/// per process and call, at most 255 bytes long. With an `extension` (".png") it is hidden and
+/// ends in it, for writers that pick the format by the name.
+std::string temporary_path(const std::string& target, const std::string& extension = "");
+
 /// Temporary output files (written beside their target, not yet renamed into place) are tracked
 /// from before they are created until they are renamed or removed, so that an interrupted run
 /// leaves none behind. The writers call these; at most 256 files are tracked at once (more are
