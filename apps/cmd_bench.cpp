@@ -510,7 +510,8 @@ std::string to_markdown(const std::vector<Row>& rows, const std::vector<SweepPoi
     const double dp = ri.psnr - rl.psnr;
     f << "- " << m << (ri.closed ? " (closed)" : " (open)") << ": PSNR isochart − lscm = " << std::showpos
       << fmt(dp, 2) << std::noshowpos << " dB; charts " << ri.charts << " vs " << rl.charts << " at L2 "
-      << fmt(ri.l2, 3) << " vs " << fmt(rl.l2, 3) << (dp > 0 ? "" : " — **lscm wins on PSNR**")
+      << fmt(ri.l2, 3) << " vs " << fmt(rl.l2, 3)
+      << (dp >= 0.005 ? "" : dp > -0.005 ? " — a tie on PSNR" : " — **lscm wins on PSNR**")  // as printed
       << (ri.charts < rl.charts ? "" : " — **isochart not fewer charts**") << "\n";
   }
   if (!f.str().empty()) s << "\nIso-charts against lscm, per mesh:\n\n" << f.str();
