@@ -3,6 +3,7 @@
 // MCGIM remesh and the original mesh with its atlas and the transferred texture.
 // `isocharts exemplar NAME -o FILE.png` (hidden): writes one of the procedural exemplars.
 
+#include <cctype>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -50,6 +51,15 @@ std::string stem_of(const std::string& path) {
   return path.substr(0, dot);
 }
 
+// The extensions of the two meshes written: the one typed keeps its case (`-o a.GLB` wrote
+// a.glb, and the file asked for was not there).
+std::pair<std::string, std::string> mesh_extensions(const std::string& output) {
+  const std::string typed = output.substr(stem_of(output).size());
+  std::string lower = typed;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return {lower == ".glb" ? typed : ".glb", lower == ".obj" ? typed : ".obj"};
+}
+
 std::string base_name(const std::string& path) {
   const auto slash = path.find_last_of('/');
   return slash == std::string::npos ? path : path.substr(slash + 1);
@@ -61,8 +71,11 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
                      ".glb or .obj; both are written, with PNG textures");
   {
     const std::string stem = stem_of(a.output);
+    const auto [glb, obj] = mesh_extensions(a.output);
     std::vector<std::string> outs;
-    for (const char* tail : {".glb", ".obj", ".mtl", ".png", "_mcgim.glb", "_mcgim.obj", "_mcgim.mtl", "_mcgim.png"})
+    for (const std::string& tail :
+         {glb, obj, std::string(".mtl"), std::string(".png"), "_mcgim" + glb, "_mcgim" + obj, std::string("_mcgim.mtl"),
+          std::string("_mcgim.png")})
       outs.push_back(stem + tail);
     ctx.check_paths({a.input, a.exemplar}, outs);
   }
@@ -149,25 +162,26 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   // Outputs: STEM.{glb,obj,png} (the input mesh on its atlas) and STEM_mcgim.{glb,obj,png}.
   const auto tw = std::chrono::steady_clock::now();
   const std::string stem = stem_of(a.output);
+  const auto [glb, obj] = mesh_extensions(a.output);
   const std::string atlas_png = stem + ".png", gim_png = stem + "_mcgim.png";
   isochart::write_image(atlas_png, atlas_tex);
   isochart::write_image(gim_png, r.texture);
   isochart::SaveOptions so_glb, so_obj;
   so_glb.texture = atlas_png;
   so_obj.texture = base_name(atlas_png);
-  isochart::save_mesh(atlas, stem + ".glb", so_glb);
-  isochart::save_mesh(atlas, stem + ".obj", so_obj);
+  isochart::save_mesh(atlas, stem + glb, so_glb);
+  isochart::save_mesh(atlas, stem + obj, so_obj);
   so_glb.texture = gim_png;
   so_obj.texture = base_name(gim_png);
-  isochart::save_mesh(pyramid[0].remesh.mesh, stem + "_mcgim.glb", so_glb);
-  isochart::save_mesh(pyramid[0].remesh.mesh, stem + "_mcgim.obj", so_obj);
+  isochart::save_mesh(pyramid[0].remesh.mesh, stem + "_mcgim" + glb, so_glb);
+  isochart::save_mesh(pyramid[0].remesh.mesh, stem + "_mcgim" + obj, so_obj);
   const double seconds_output = seconds_since(tw);
   ctx.end_progress();
 
   nlohmann::json j;
   j["input"] = a.input;
   j["exemplar"] = a.exemplar;
-  j["outputs"] = {stem + ".glb", stem + ".obj", atlas_png, stem + "_mcgim.glb", stem + "_mcgim.obj", gim_png};
+  j["outputs"] = {stem + glb, stem + obj, atlas_png, stem + "_mcgim" + glb, stem + "_mcgim" + obj, gim_png};
   j["scale"] = r.scale;
   j["charts"] = built.num_charts();
   j["seam_error"] = finite_or_null(r.seam_error);
@@ -202,7 +216,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   if (std::isnan(r.seam_error)) t << "none (no seam)";
   else t << r.seam_error;
   t << ", match error " << r.match_error << ", texel-scale spread "
-    << r.texel_scale_spread << "\n  wrote " << stem << ".glb/.obj/.png and " << stem << "_mcgim.glb/.obj/.png in "
+    << r.texel_scale_spread << "\n  wrote " << stem << glb << "/" << obj << "/.png and " << stem << "_mcgim" << glb << "/" << obj << "/.png in "
     << j["seconds"].get<double>() << " s\n";
   ctx.emit(j, t.str());
 }

@@ -288,6 +288,10 @@ TEST_CASE("isocharts synth writes textured meshes and its report", "[synth][cli]
   CHECK(tex.width == 128);
   CHECK(tmp.run("exemplar bricks --size 32 -o " + tmp / "b.png") == 0);
   CHECK(isochart::read_image(tmp / "b.png").width == 32);
+  // The output named keeps the case of its extension (-o U.GLB wrote U.glb).
+  REQUIRE(tmp.run("-q synth builtin:sphere --levels 48,24 --atlas-size 64 -o " + tmp / "U.GLB") == 0);
+  for (const char* f : {"U.GLB", "U.obj", "U_mcgim.GLB", "U_mcgim.obj"}) CHECK(fs::exists(tmp / f));
+  CHECK(!fs::exists(tmp / "U.glb"));
 }
 
 TEST_CASE("a tap off the mesh boundary is dropped", "[synth]") {
