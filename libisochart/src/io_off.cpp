@@ -149,6 +149,12 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
     }
     // Anything left is a face colour, which a mesh does not keep.
   }
+  // More lines than the header declares: the counts are wrong, and the rest of the mesh would
+  // be dropped without a word.
+  if (next_content(line))
+    fail_at_line(path, lines.line_number(),
+                 "more data after the " + std::to_string(nf) + " faces the header declares (" + quoted(line) +
+                     "); the header's counts do not match the file");
   if (st) raw.polygon_uvs = raw.polygons;
   return raw;
 }

@@ -330,6 +330,12 @@ TEST_CASE("OFF: errors name the line", "[io]") {
   CHECK_THAT(err("OFF\n-3 1 0\n"), Catch::Contains("out of range"));
   CHECK(err("OFF\n3 1 0\n0 0 inf\n1 0 0\n0 1 0\n3 0 1 2\n") == "line 3: value 'inf' is not finite");
   CHECK(err("OFF BINARY\n") == "line 1: binary OFF is not supported");
+  // Faces past the declared count were dropped without a word; comments after the end are fine.
+  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n") ==
+        "line 7: more data after the 1 faces the header declares ('3 0 2 1'); the header's counts do not "
+        "match the file");
+  CHECK(read_raw_mesh(d.write("ok.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n# end\n")).polygons.size() ==
+        1);
 }
 
 // ---- PLY -----------------------------------------------------------------------------------
