@@ -18,9 +18,6 @@ using isochart::InputError;
 
 Image to_rgb_exemplar(const Image& image, const std::string& name, long long* clipped) {
   if (clipped) *clipped = 0;
-  if (image.channels < 1 || image.channels > 4)
-    throw InputError(name, "exemplar has " + std::to_string(image.channels) +
-                               " channels; expected grey, grey+alpha, RGB or RGBA");
   if (image.width < 4 || image.height < 4)
     throw InputError(name, "exemplar is " + std::to_string(image.width) + "x" +
                                std::to_string(image.height) + " pixels; at least 4x4 is needed");
@@ -38,6 +35,11 @@ Image to_rgb_exemplar(const Image& image, const std::string& name, long long* cl
     }
     if (colour.size() != 3) colour.clear();
   }
+  // Without R, G and B by name, the channels are taken by position, so there may be no more
+  // than grey+alpha or RGBA; with them, other channels (depth, normals) are left out.
+  if (colour.empty() && (image.channels < 1 || image.channels > 4))
+    throw InputError(name, "exemplar has " + std::to_string(image.channels) +
+                               " channels; expected grey, grey+alpha, RGB or RGBA");
   if (colour.empty())
     for (int c = 0; c < image.channels; ++c)
       if (c != alpha) colour.push_back(c);

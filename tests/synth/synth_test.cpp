@@ -120,6 +120,16 @@ TEST_CASE("bad exemplars are InputErrors", "[synth]") {
   const Image n = synth::to_rgb_exemplar(named, "named");
   CHECK(n.at(1, 1, 0) == 0.75f);
   CHECK(n.at(1, 1, 2) == 0.0f);
+  // With R, G and B named, further channels (a renderer's depth, normals) are left out rather
+  // than refusing the image for its channel count.
+  Image passes(8, 8, 6, 0.25f);
+  passes.channel_names = {"Z", "R", "G", "B", "A", "N.x"};
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) passes.at(x, y, 4) = 1.0f, passes.at(x, y, 1) = 0.5f;
+  const Image p = synth::to_rgb_exemplar(passes, "passes.exr");
+  CHECK(p.channels == 3);
+  CHECK(p.at(2, 3, 0) == 0.5f);
+  CHECK(p.at(2, 3, 1) == 0.25f);
   Image two(8, 8, 2, 0.5f);
   two.channel_names = {"U", "V"};
   CHECK_THROWS_WITH(synth::to_rgb_exemplar(two, "uv.exr"), Catch::Contains("2 colour channels (U,V)"));
