@@ -17,7 +17,7 @@ namespace synth {
 /// and is dropped; EXR values are clamped to [0, 1], and `clipped` (when given) receives how
 /// many colour values were, so that callers can say so.
 /// \throw isochart::InputError(path, ...) for a missing or unreadable file, an image smaller
-///        than 4×4, transparency, or a channel count other than 1–4.
+///        than 4×4, transparency, or a channel count other than 1–4 without R, G, B named.
 isochart::Image load_exemplar(const std::string& path, long long* clipped = nullptr);
 
 /// Checks an in-memory exemplar the same way and converts it to RGB.
