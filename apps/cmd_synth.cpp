@@ -80,10 +80,14 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
     ctx.check_paths({a.input, a.exemplar}, outs);
   }
   if (!a.direction.empty() && a.direction.size() != 3) bad_option("--direction takes three numbers x,y,z");
-  if (!a.direction.empty()) {
-    const double n2 = a.direction[0] * a.direction[0] + a.direction[1] * a.direction[1] + a.direction[2] * a.direction[2];
-    // (0,0,0) would silently mean "computed field", NaN nothing at all.
-    if (!std::isfinite(n2) || !(n2 > 0)) bad_option("--direction must be a finite, non-zero vector x,y,z");
+  std::vector<double> direction = a.direction;
+  if (!direction.empty()) {
+    // (0,0,0) would silently mean "computed field", NaN nothing at all. Only the direction
+    // counts: scaled to a largest component of 1, since squaring 1e-300 or 1e308 leaves 0 or inf.
+    double largest = 0;
+    for (double x : direction) largest = std::isfinite(x) ? std::max(largest, std::abs(x)) : NAN;
+    if (!(largest > 0)) bad_option("--direction must be a finite, non-zero vector x,y,z");
+    for (double& x : direction) x /= largest;
   }
   if (std::isnan(a.coherence)) bad_option("--coherence must be a number");
   // Checked here, not only in the library, so that a typo fails before the atlas is built.
@@ -129,7 +133,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   synth::SynthOptions so;
   so.scale = a.scale;
   so.pixels_per_texel = a.pixels_per_texel;
-  if (!a.direction.empty()) so.direction = {a.direction[0], a.direction[1], a.direction[2]};
+  if (!direction.empty()) so.direction = {direction[0], direction[1], direction[2]};
   so.neighborhood = a.neighborhood;
   so.coarse_neighborhood = a.coarse_neighborhood;
   if (a.full_passes >= 0) so.full_passes = a.full_passes;

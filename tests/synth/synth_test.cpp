@@ -158,6 +158,12 @@ TEST_CASE("bad exemplars are InputErrors", "[synth]") {
   CHECK(tmp.run("synth builtin:sphere --direction 0,0,0 -o " + tmp / "out.glb") == 2);
   CHECK(tmp.stderr_text().find("--direction") != std::string::npos);
   CHECK(tmp.run("synth builtin:sphere --direction nan,0,1 -o " + tmp / "out.glb") == 2);
+  CHECK(tmp.run("synth builtin:sphere --direction 1,inf,1 -o " + tmp / "out.glb") == 2);
+  // Tiny and huge components name a direction too (their squares underflowed or overflowed).
+  CHECK(tmp.run("-q synth builtin:sphere --levels 48,24 --atlas-size 64 --direction 1e-300,0,0 -o " +
+                tmp / "tiny.glb") == 0);
+  CHECK(tmp.run("-q synth builtin:sphere --levels 48,24 --atlas-size 64 --direction 1e308,1e308,0 -o " +
+                tmp / "huge.glb") == 0);
   CHECK(!fs::exists(tmp / "out.glb"));
 }
 
