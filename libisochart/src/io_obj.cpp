@@ -64,9 +64,31 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
   LineScanner lines(path, data);
   std::string_view line;
   std::vector<int> poly, poly_uv;
+  std::string joined;
+  auto continued = [](std::string_view l) {
+    while (!l.empty() && is_space(l.back())) l.remove_suffix(1);
+    return !l.empty() && l.back() == '\\';
+  };
   while (lines.next(line)) {
     std::string_view rest = line, key;
     if (!next_token(rest, key) || key[0] == '#') continue;
+    // A statement may be split over lines ending in a backslash (the format allows it for long
+    // face lists); errors name its last line.
+    if (continued(line)) {
+      joined.clear();
+      for (bool more = true; more;) {
+        std::string_view l = line;
+        while (!l.empty() && is_space(l.back())) l.remove_suffix(1);
+        more = !l.empty() && l.back() == '\\';
+        if (more) l.remove_suffix(1);
+        joined.append(l);
+        joined.push_back(' ');
+        if (more && !lines.next(line)) more = false;
+      }
+      line = joined;
+      rest = line;
+      next_token(rest, key);
+    }
     const long long ln = lines.line_number();
 
     if (key == "v") {

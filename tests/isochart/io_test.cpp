@@ -165,6 +165,21 @@ TEST_CASE("OBJ: corner forms, relative indices, polygons", "[io]") {
   CHECK(Topology(r.mesh).genus() == 0);
 }
 
+TEST_CASE("OBJ: a statement may continue on the next line after a backslash", "[io]") {
+  TempDir d;
+  const RawMesh raw = read_raw_mesh(d.write("c.obj",
+                                            "# a comment ending in \\\nv 0 0 0\nv 1 0 \\\n 0\nv 1 1 0\nv 0 1 0\r\n"
+                                            "f 1 2 \\ \r\n3 \\\n4\n"));
+  REQUIRE(raw.positions.size() == 4);
+  CHECK(raw.positions[1].x == 1);
+  CHECK(raw.positions[1].z == 0);
+  REQUIRE(raw.polygons.size() == 1);
+  CHECK(raw.polygons[0] == std::vector<int>{0, 1, 2, 3});
+  // Errors name the statement's last line.
+  CHECK(load_error(d.write("e.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \\\n9\n")) ==
+        "line 5: vertex index 9 is out of range (the file has 3 vertices)");
+}
+
 TEST_CASE("OBJ: colours, normals, UVs and groups", "[io]") {
   TempDir d;
   const std::string path =
