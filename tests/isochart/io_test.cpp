@@ -610,6 +610,11 @@ TEST_CASE("glTF: malformed files are clear errors", "[io]") {
   s.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
   s.doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
   CHECK_THAT(load_error(d.write("draco.glb", glb_of(s))), Catch::Contains("unsupported extension"));
+  // Only points and lines: said so, not "no vertices".
+  s = gltf_sample();
+  for (auto& mesh : s.doc["meshes"])
+    for (auto& prim : mesh["primitives"]) prim["mode"] = 1;
+  CHECK(load_error(d.write("lines.glb", glb_of(s))) == "has only point and line primitives (3), no triangles");
   LoadOptions o;
   o.max_faces = 3;  // the fan would be faces 3 and 4
   CHECK_THAT(load_error(d.write("limit.glb", glb_of(gltf_sample())), o),
