@@ -259,6 +259,10 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
       const std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
       std::string stem = slash == std::string::npos ? path : path.substr(slash + 1);
       stem = stem.substr(0, stem.find_last_of('.'));
+      // `mtllib` takes a list of names separated by spaces: a name with spaces in it would be
+      // read as several missing files by other tools, so the MTL's has underscores instead.
+      for (char& c : stem)
+        if (c == ' ' || c == '\t') c = '_';
       const std::string mtl_path = dir + stem + ".mtl";
       write_file_atomic(mtl_path, mtl_text(options.texture));
       try {

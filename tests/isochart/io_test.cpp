@@ -750,6 +750,10 @@ TEST_CASE("textures: OBJ gets an MTL, glb embeds the image", "[io]") {
   CHECK(obj.find("usemtl material0\n") != std::string::npos);
   CHECK(read_bytes(d.file("t.mtl")).find("map_Kd atlas.png\n") != std::string::npos);
   CHECK(load_mesh(d.file("t.obj")).mesh.num_faces() == 12);
+  // mtllib lists names separated by spaces: the MTL of "my cube.obj" is "my_cube.mtl".
+  save_mesh(m, d.file("my cube.obj"), o);
+  CHECK(read_bytes(d.file("my cube.obj")).find("mtllib my_cube.mtl\n") != std::string::npos);
+  CHECK(d.entries() == std::vector<std::string>{"my cube.obj", "my_cube.mtl", "t.mtl", "t.obj"});
 
   const std::string png = std::string(ISOCHARTS_SHARED_DATA) + "/exemplars/bricks.png";
   o.texture = png;
