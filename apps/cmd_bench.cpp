@@ -511,7 +511,9 @@ std::string to_markdown(const std::vector<Row>& rows, const std::vector<SweepPoi
     f << "- " << m << (ri.closed ? " (closed)" : " (open)") << ": PSNR isochart − lscm = " << std::showpos
       << fmt(dp, 2) << std::noshowpos << " dB; charts " << ri.charts << " vs " << rl.charts << " at L2 "
       << fmt(ri.l2, 3) << " vs " << fmt(rl.l2, 3)
-      << (dp >= 0.005 ? "" : dp > -0.005 ? " — a tie on PSNR" : " — **lscm wins on PSNR**")  // as printed
+      << (dp >= 0.005   ? ""
+          : dp > -0.005 ? " — a tie on PSNR"
+                        : " — **lscm wins on PSNR**")  // as printed
       << (ri.charts < rl.charts ? "" : " — **isochart not fewer charts**") << "\n";
   }
   if (!f.str().empty()) s << "\nIso-charts against lscm, per mesh:\n\n" << f.str();

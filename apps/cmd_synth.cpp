@@ -73,9 +73,8 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
     const std::string stem = stem_of(a.output);
     const auto [glb, obj] = mesh_extensions(a.output);
     std::vector<std::string> outs;
-    for (const std::string& tail :
-         {glb, obj, std::string(".mtl"), std::string(".png"), "_mcgim" + glb, "_mcgim" + obj, std::string("_mcgim.mtl"),
-          std::string("_mcgim.png")})
+    for (const std::string& tail : {glb, obj, std::string(".mtl"), std::string(".png"), "_mcgim" + glb,
+                                    "_mcgim" + obj, std::string("_mcgim.mtl"), std::string("_mcgim.png")})
       outs.push_back(stem + tail);
     ctx.check_paths({a.input, a.exemplar}, outs);
   }
@@ -217,10 +216,12 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   t << a.input << " with " << a.exemplar << ": " << built.num_charts() << " charts, levels";
   for (int lv : a.levels) t << " " << lv;
   t << "\n  seam error ";
-  if (std::isnan(r.seam_error)) t << "none (no seam)";
-  else t << r.seam_error;
-  t << ", match error " << r.match_error << ", texel-scale spread "
-    << r.texel_scale_spread << "\n  wrote " << stem << glb << "/" << obj << "/.png and " << stem << "_mcgim" << glb << "/" << obj << "/.png in "
+  if (std::isnan(r.seam_error))
+    t << "none (no seam)";
+  else
+    t << r.seam_error;
+  t << ", match error " << r.match_error << ", texel-scale spread " << r.texel_scale_spread << "\n  wrote "
+    << stem << glb << "/" << obj << "/.png and " << stem << "_mcgim" << glb << "/" << obj << "/.png in "
     << j["seconds"].get<double>() << " s\n";
   ctx.emit(j, t.str());
 }

@@ -607,7 +607,8 @@ class Builder {
       for (int c = 0; c < static_cast<int>(charts.size()); ++c)
         if (!tried[c] && is_small(c)) smalls.push_back(c);
       if (smalls.empty()) break;
-      reported = std::max(reported, static_cast<double>(rounds) / static_cast<double>(rounds + smalls.size()));
+      reported =
+          std::max(reported, static_cast<double>(rounds) / static_cast<double>(rounds + smalls.size()));
       ++rounds;
       try {
         report(progress_, Stage::Merging, reported);

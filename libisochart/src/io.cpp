@@ -205,8 +205,8 @@ MeshFormat format_from_path(const std::string& path) {
   if (ext == "ply") return MeshFormat::Ply;
   if (ext == "gltf") return MeshFormat::Gltf;
   if (ext == "glb") return MeshFormat::Glb;
-  throw InputError(
-      path, "unknown mesh format " + io_detail::quoted("." + ext) + " (expected .obj, .off, .ply, .gltf or .glb)");
+  throw InputError(path, "unknown mesh format " + io_detail::quoted("." + ext) +
+                             " (expected .obj, .off, .ply, .gltf or .glb)");
 }
 
 RawMesh read_raw_mesh(const std::string& path, const LoadOptions& options) {

@@ -365,8 +365,7 @@ class GltfReader {
       raw_.warnings.push_back("only some primitives have colours; colours ignored");
     // Otherwise reported as "no vertices", which a file full of points is not.
     if (skipped_primitives_ > 0 && raw_.polygons.empty())
-      fail("has only point and line primitives (" + std::to_string(skipped_primitives_) +
-           "), no triangles");
+      fail("has only point and line primitives (" + std::to_string(skipped_primitives_) + "), no triangles");
     if (skipped_primitives_ > 0)
       raw_.warnings.push_back("ignored " + std::to_string(skipped_primitives_) +
                               " point and line primitives");

@@ -3,22 +3,22 @@
 
 #include "synth/synth.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
-#include <string>
 #include <deque>
+#include <flann/flann.hpp>
 #include <limits>
 #include <numeric>
-
-#include <Eigen/Dense>
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
-#include <flann/flann.hpp>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
+#include <string>
 
 #include "isochart/error.h"
 #include "isochart/rng.h"
@@ -586,11 +586,12 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
       } else {
         const double f = res.scale * finest_texel;
         throw isochart::InputError(
-            "", format("exemplar scale too small: it would magnify the %dx%d exemplar %.4g times, to %.4gx%.4g "
-                       "pixels, more than both its own size and the finest level's %.0f samples; the smallest "
-                       "scale is %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel)",
-                       exemplar.width, exemplar.height, 1 / f, exemplar.width / f, exemplar.height / f,
-                       level_pixels, round_up_4(min_scale), round_up_4(min_factor)));
+            "",
+            format("exemplar scale too small: it would magnify the %dx%d exemplar %.4g times, to %.4gx%.4g "
+                   "pixels, more than both its own size and the finest level's %.0f samples; the smallest "
+                   "scale is %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel)",
+                   exemplar.width, exemplar.height, 1 / f, exemplar.width / f, exemplar.height / f,
+                   level_pixels, round_up_4(min_scale), round_up_4(min_factor)));
       }
     }
   }
@@ -608,10 +609,11 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
         res.scale = max_scale;
       } else {
         throw isochart::InputError(
-            "", format("exemplar scale too large: a texel of the finest level would cover %.4g exemplar pixels, "
-                       "shrinking the %dx%d exemplar below 4 pixels across; the largest scale is %.4g exemplar "
-                       "pixels per unit length (%.4g exemplar pixels per texel)",
-                       f, exemplar.width, exemplar.height, max_scale, max_factor));
+            "",
+            format("exemplar scale too large: a texel of the finest level would cover %.4g exemplar pixels, "
+                   "shrinking the %dx%d exemplar below 4 pixels across; the largest scale is %.4g exemplar "
+                   "pixels per unit length (%.4g exemplar pixels per texel)",
+                   f, exemplar.width, exemplar.height, max_scale, max_factor));
       }
     }
   }
@@ -631,12 +633,13 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
         res.scale = min_scale;
       } else {
         throw isochart::InputError(
-            "", format("exemplar too large at this scale: the %dx%d exemplar at %.4g exemplar pixels per texel "
-                       "would be searched as %.4g pixels (about %.2g GB); at most %.0f (1024x1024) are: use a "
-                       "scale of at least %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel) "
-                       "or a smaller exemplar",
-                       exemplar.width, exemplar.height, f, searched, searched * 1.2e3 / 1e9, kMaxSearchedPixels,
-                       round_up_4(min_scale), round_up_4(min_factor)));
+            "",
+            format("exemplar too large at this scale: the %dx%d exemplar at %.4g exemplar pixels per texel "
+                   "would be searched as %.4g pixels (about %.2g GB); at most %.0f (1024x1024) are: use a "
+                   "scale of at least %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel) "
+                   "or a smaller exemplar",
+                   exemplar.width, exemplar.height, f, searched, searched * 1.2e3 / 1e9, kMaxSearchedPixels,
+                   round_up_4(min_scale), round_up_4(min_factor)));
       }
     }
   }

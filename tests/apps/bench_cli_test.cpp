@@ -216,8 +216,9 @@ TEST_CASE("bench: equal PSNR is a tie, not a win for lscm", "[bench]") {
   const fs::path dir = fresh_dir("tie");
   const fs::path mesh = dir / "tri.obj", out = dir / "out", err = dir / "stderr.txt";
   std::ofstream(mesh) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-  REQUIRE(run_cli("-q bench '" + mesh.string() + "' --methods isochart,lscm --res 64 --sweep none --no-plots --out '" +
-                      out.string() + "'",
+  REQUIRE(run_cli("-q bench '" + mesh.string() +
+                      "' --methods isochart,lscm --res 64 --sweep none --no-plots --out '" + out.string() +
+                      "'",
                   err) == 0);
   const std::string md = slurp(out / "bench.md");
   CHECK_THAT(md, Catch::Contains("PSNR isochart − lscm = 0.00 dB") && Catch::Contains("a tie on PSNR"));

@@ -425,7 +425,8 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt"});
   // A tiny scale printed the magnified size with all its 300 digits and lost the advice at the
   // end of a fixed buffer.
-  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --scale 1e-300",
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() +
+                    "' --levels 64,32 --scale 1e-300",
                 err) == 2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --scale 1e-300: exemplar scale too small") &&
                          Catch::Contains("the smallest scale is") && Catch::EndsWith("pixels per texel)\n"));
@@ -574,10 +575,11 @@ TEST_CASE("outputs with names of up to 255 bytes are written", "[cli]") {
   // "wrote"), for derived names too (synth's OUT_mcgim.png).
   const std::string too_long(252, 'M');
   CHECK(run_cli("-q atlas builtin:face -o '" + (tmp.path / (too_long + ".obj")).string() + "'", err) == 2);
-  CHECK_THAT(read_bytes(err), Catch::EndsWith("cannot write: the file name has 256 bytes, more than the 255 the "
-                                              "directory allows\n"));
-  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / (std::string(246, 'S') + ".glb")).string() + "'", err) ==
-        2);
+  CHECK_THAT(read_bytes(err),
+             Catch::EndsWith("cannot write: the file name has 256 bytes, more than the 255 the "
+                             "directory allows\n"));
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / (std::string(246, 'S') + ".glb")).string() + "'",
+                err) == 2);
   CHECK_THAT(read_bytes(err), Catch::Contains("_mcgim.glb: cannot write: the file name has 256 bytes"));
   CHECK(entries(tmp.path) == std::vector<std::string>{stem + ".obj", stem + ".png", "err.txt"});
 }

@@ -2,8 +2,8 @@
 
 #include <tbb/global_control.h>
 
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 
 #include "isochart/builtin.h"
@@ -333,8 +333,8 @@ TEST_CASE("merging reports its rounds and can be cancelled between them", "[atla
       return true;
     };
     const Atlas a = build_atlas(sphere, o, record);
-    INFO(threads << " threads: " << a.stats.charts_before_merge << " charts before merging, " << a.num_charts()
-                 << " after, " << fractions.size() << " rounds");
+    INFO(threads << " threads: " << a.stats.charts_before_merge << " charts before merging, "
+                 << a.num_charts() << " after, " << fractions.size() << " rounds");
     REQUIRE(fractions.size() >= static_cast<size_t>(a.num_charts()));
     CHECK(std::is_sorted(fractions.begin(), fractions.end()));
     CHECK(fractions.front() == 0);

@@ -167,9 +167,10 @@ TEST_CASE("OBJ: corner forms, relative indices, polygons", "[io]") {
 
 TEST_CASE("OBJ: a statement may continue on the next line after a backslash", "[io]") {
   TempDir d;
-  const RawMesh raw = read_raw_mesh(d.write("c.obj",
-                                            "# a comment ending in \\\nv 0 0 0\nv 1 0 \\\n 0\nv 1 1 0\nv 0 1 0\r\n"
-                                            "f 1 2 \\ \r\n3 \\\n4\n"));
+  const RawMesh raw =
+      read_raw_mesh(d.write("c.obj",
+                            "# a comment ending in \\\nv 0 0 0\nv 1 0 \\\n 0\nv 1 1 0\nv 0 1 0\r\n"
+                            "f 1 2 \\ \r\n3 \\\n4\n"));
   REQUIRE(raw.positions.size() == 4);
   CHECK(raw.positions[1].x == 1);
   CHECK(raw.positions[1].z == 0);
@@ -349,8 +350,8 @@ TEST_CASE("OFF: errors name the line", "[io]") {
   CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n") ==
         "line 7: more data after the 1 faces the header declares ('3 0 2 1'); the header's counts do not "
         "match the file");
-  CHECK(read_raw_mesh(d.write("ok.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n# end\n")).polygons.size() ==
-        1);
+  CHECK(read_raw_mesh(d.write("ok.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n# end\n"))
+            .polygons.size() == 1);
 }
 
 // ---- PLY -----------------------------------------------------------------------------------
@@ -614,7 +615,8 @@ TEST_CASE("glTF: malformed files are clear errors", "[io]") {
   s = gltf_sample();
   for (auto& mesh : s.doc["meshes"])
     for (auto& prim : mesh["primitives"]) prim["mode"] = 1;
-  CHECK(load_error(d.write("lines.glb", glb_of(s))) == "has only point and line primitives (3), no triangles");
+  CHECK(load_error(d.write("lines.glb", glb_of(s))) ==
+        "has only point and line primitives (3), no triangles");
   LoadOptions o;
   o.max_faces = 3;  // the fan would be faces 3 and 4
   CHECK_THAT(load_error(d.write("limit.glb", glb_of(gltf_sample())), o),

@@ -146,7 +146,8 @@ TEST_CASE("bad exemplars are InputErrors", "[synth]") {
   isochart::write_image(tmp / "hdr.exr", hdr);
   CHECK(tmp.run("--json synth builtin:sphere --levels 64,32 --exemplar " + tmp / "hdr.exr" + " -o " +
                 tmp / "hdr.glb") == 0);
-  CHECK_THAT(tmp.stderr_text(), Catch::Contains("hdr.exr: 2 colour values (1.04 %) lie outside [0, 1] and are clipped"));
+  CHECK_THAT(tmp.stderr_text(),
+             Catch::Contains("hdr.exr: 2 colour values (1.04 %) lie outside [0, 1] and are clipped"));
   synth::to_rgb_exemplar(Image(8, 8, 3, 1.0f), "white", &clipped);
   CHECK(clipped == 0);
   // The CLI turns them into exit code 2 naming the file.
@@ -667,9 +668,10 @@ TEST_CASE("an exemplar too large to search at the scale asked for is refused wit
   const Image big = synth::make_exemplar("noise", 1100);
   synth::SynthOptions so;
   so.pixels_per_texel = 1;
-  CHECK_THROWS_WITH(synth::synthesize(atlas, pyramid, big, so),
-                    Catch::StartsWith("exemplar too large at this scale: the 1100x1100 exemplar at 1 exemplar pixel") &&
-                        Catch::Contains("(1.075 exemplar pixels per texel)"));
+  CHECK_THROWS_WITH(
+      synth::synthesize(atlas, pyramid, big, so),
+      Catch::StartsWith("exemplar too large at this scale: the 1100x1100 exemplar at 1 exemplar pixel") &&
+          Catch::Contains("(1.075 exemplar pixels per texel)"));
   // The scale it names works.
   so.pixels_per_texel = 1.075;
   so.full_passes = 0;  // the search tree is built either way; the passes only take time

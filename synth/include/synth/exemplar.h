@@ -22,7 +22,8 @@ isochart::Image load_exemplar(const std::string& path, long long* clipped = null
 
 /// Checks an in-memory exemplar the same way and converts it to RGB.
 /// \throw isochart::InputError(name, ...) as load_exemplar.
-isochart::Image to_rgb_exemplar(const isochart::Image& image, const std::string& name, long long* clipped = nullptr);
+isochart::Image to_rgb_exemplar(const isochart::Image& image, const std::string& name,
+                                long long* clipped = nullptr);
 
 /// The exemplar resampled so that one of its pixels covers `factor` pixels of the original
 /// (factor > 1 shrinks with a Gaussian pre-filter of σ = 0.5·factor pixels, factor ≤ 1
