@@ -65,25 +65,26 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
   std::string_view line;
   std::vector<int> poly, poly_uv;
   std::string joined;
-  auto continued = [](std::string_view l) {
+  // Drops trailing blanks and a continuation backslash from `l`; true when there was one.
+  auto cut_continuation = [](std::string_view& l) {
     while (!l.empty() && is_space(l.back())) l.remove_suffix(1);
-    return !l.empty() && l.back() == '\\';
+    if (l.empty() || l.back() != '\\') return false;
+    l.remove_suffix(1);
+    return true;
   };
   while (lines.next(line)) {
     std::string_view rest = line, key;
     if (!next_token(rest, key) || key[0] == '#') continue;
     // A statement may be split over lines ending in a backslash (the format allows it for long
     // face lists); errors name its last line.
-    if (continued(line)) {
-      joined.clear();
-      for (bool more = true; more;) {
-        std::string_view l = line;
-        while (!l.empty() && is_space(l.back())) l.remove_suffix(1);
-        more = !l.empty() && l.back() == '\\';
-        if (more) l.remove_suffix(1);
-        joined.append(l);
-        joined.push_back(' ');
-        if (more && !lines.next(line)) more = false;
+    std::string_view part = line;
+    if (cut_continuation(part)) {
+      joined.assign(part);
+      while (lines.next(line)) {
+        part = line;
+        const bool more = cut_continuation(part);
+        joined.append(" ").append(part);
+        if (!more) break;
       }
       line = joined;
       rest = line;
