@@ -1,7 +1,9 @@
 // `isocharts atlas IN -o OUT.obj`: the iso-chart texture atlas of a mesh.
 
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
+#include <iomanip>
 #include <sstream>
 
 #include "cli.h"
@@ -113,6 +115,37 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     w << "the atlas misses its bounds (L2 " << s.l2 << ", Linf " << s.linf << ", " << s.flipped << " flipped, "
       << s.overlapping_pairs << " overlapping pairs): some triangles are too thin for the coordinates' precision";
     ctx.warn(a.input, w.str());
+  }
+  // A long thin surface (a ribbon, a cable) is one chart as long as the texture is wide: in a
+  // square texture it fills a sliver of it (a 1000:1 strip packed at 0.002). The texture's own
+  // shape is the remedy, and the user may not think of it. A chart's length over its width is
+  // about its extent squared over its area, whatever way it was turned in packing.
+  if (s.packing_ratio < 0.25 && atlas.num_charts() > 0) {
+    const int nc = atlas.num_charts();
+    std::vector<isochart::Vec2d> lo(nc, {1e300, 1e300}), hi(nc, {-1e300, -1e300});
+    std::vector<double> area(nc, 0);
+    const double W = a.options.pack.width, H = a.options.pack.height;
+    for (int f = 0; f < in.mesh.num_faces(); ++f) {
+      const int c = atlas.face_chart[f];
+      isochart::Vec2d p[3];
+      for (int k = 0; k < 3; ++k) {
+        const isochart::Vec2d& uv = atlas.uvs[atlas.face_uvs[f][k]];
+        p[k] = {uv.x * W, uv.y * H};
+        lo[c] = {std::min(lo[c].x, p[k].x), std::min(lo[c].y, p[k].y)};
+        hi[c] = {std::max(hi[c].x, p[k].x), std::max(hi[c].y, p[k].y)};
+      }
+      area[c] += 0.5 * std::abs((p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[1].y - p[0].y) * (p[2].x - p[0].x));
+    }
+    const int big = static_cast<int>(std::max_element(area.begin(), area.end()) - area.begin());
+    const double dx = hi[big].x - lo[big].x, dy = hi[big].y - lo[big].y;
+    const double elongation = area[big] > 0 ? (dx * dx + dy * dy) / area[big] : 0;
+    if (elongation > 16) {
+      std::ostringstream m;
+      m << "the charts fill " << std::setprecision(2) << 100 * s.packing_ratio
+        << " % of the texture: the largest is about " << std::lround(elongation)
+        << " times longer than wide; a texture of its shape (--width/--height) holds it at a higher resolution";
+      ctx.warn(a.input, m.str());
+    }
   }
 
   nlohmann::json j;

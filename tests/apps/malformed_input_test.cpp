@@ -583,3 +583,26 @@ TEST_CASE("outputs with names of up to 255 bytes are written", "[cli]") {
   CHECK_THAT(read_bytes(err), Catch::Contains("_mcgim.glb: cannot write: the file name has 256 bytes"));
   CHECK(entries(tmp.path) == std::vector<std::string>{stem + ".obj", stem + ".png", "err.txt"});
 }
+
+TEST_CASE("a long thin chart in a square texture gets a warning naming the remedy", "[cli]") {
+  // A 100:1 flat strip is one chart that fills about 1 % of a square texture; a texture of its
+  // shape holds it whole.
+  TempDir tmp("strip");
+  const fs::path strip = tmp.path / "strip.obj", err = tmp.path / "err.txt";
+  std::string obj;
+  const int n = 100;
+  for (int i = 0; i <= n; ++i) obj += "v " + std::to_string(i) + " 0 0\nv " + std::to_string(i) + " 1 0\n";
+  for (int i = 0; i < n; ++i) {
+    const int a = 2 * i + 1, b = a + 1, c = a + 2, d = a + 3;
+    obj += "f " + std::to_string(a) + " " + std::to_string(c) + " " + std::to_string(d) + "\nf " +
+           std::to_string(a) + " " + std::to_string(d) + " " + std::to_string(b) + "\n";
+  }
+  write_bytes(strip, obj);
+  CHECK(run_cli("atlas '" + strip.string() + "' -o '" + (tmp.path / "a.obj").string() + "'", err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains("strip.obj: the charts fill") &&
+                                  Catch::Contains("the largest is about 10") &&  // 100-odd, with the gutter
+                                  Catch::Contains("times longer than wide; a texture of its shape (--width/--height)"));
+  CHECK(run_cli("atlas '" + strip.string() + "' -o '" + (tmp.path / "b.obj").string() + "' --width 4096 --height 40",
+                err) == 0);
+  CHECK(read_bytes(err).empty());
+}
