@@ -42,10 +42,15 @@ namespace {
   return out;
 }
 
-// Printed rounded up to four digits, so that the value shown is one that works.
+// A bound printed to four digits, rounded towards the side that works: up for a least value,
+// down for a greatest one.
 double round_up_4(double x) {
   const double digits = std::pow(10.0, 3 - std::floor(std::log10(x)));
   return std::ceil(x * digits - 1e-6) / digits;
+}
+double round_down_4(double x) {
+  const double digits = std::pow(10.0, 3 - std::floor(std::log10(x)));
+  return std::floor(x * digits + 1e-6) / digits;
 }
 
 }  // namespace
@@ -565,6 +570,14 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
               : o.scale > 0                                               ? o.scale
                                         : exemplar.width / (0.1 * isochart::bounding_box(atlas).diagonal());
 
+  // Each limit on the scale below moves the default scale to the limit, and refuses a scale the
+  // user asked for, saying why and what works.
+  const bool default_scale = o.scale <= 0 && o.pixels_per_texel <= 0;
+  const auto move_or_refuse = [&](double limit, const std::string& why) {
+    if (!default_scale) throw isochart::InputError("", why);
+    res.scale = limit;
+  };
+
   // An exemplar magnified past the size of the finest level's whole image would be copied as
   // one blown-up piece, and its pyramid (and the neighbourhoods searched in it) would not fit
   // in memory for scales a little smaller still: the scale has a floor. The default scale is
@@ -581,18 +594,14 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     const double min_factor = std::sqrt(ex_pixels / max_pixels);  // ≤ 1: at most this magnification
     if (finest_texel > 0 && res.scale * finest_texel < min_factor * (1 - 1e-9)) {
       const double min_scale = min_factor / finest_texel;
-      if (o.scale <= 0 && o.pixels_per_texel <= 0) {
-        res.scale = min_scale;
-      } else {
-        const double f = res.scale * finest_texel;
-        throw isochart::InputError(
-            "",
-            format("exemplar scale too small: it would magnify the %dx%d exemplar %.4g times, to %.4gx%.4g "
-                   "pixels, more than both its own size and the finest level's %.0f samples; the smallest "
-                   "scale is %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel)",
-                   exemplar.width, exemplar.height, 1 / f, exemplar.width / f, exemplar.height / f,
-                   level_pixels, round_up_4(min_scale), round_up_4(min_factor)));
-      }
+      const double f = res.scale * finest_texel;
+      move_or_refuse(
+          min_scale,
+          format("exemplar scale too small: it would magnify the %dx%d exemplar %.4g times, to %.4gx%.4g "
+                 "pixels, more than both its own size and the finest level's %.0f samples; the smallest "
+                 "scale is %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel)",
+                 exemplar.width, exemplar.height, 1 / f, exemplar.width / f, exemplar.height / f, level_pixels,
+                 round_up_4(min_scale), round_up_4(min_factor)));
     }
   }
 
@@ -605,16 +614,12 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     const double f = res.scale * pyramid[0].stats.texel_size;
     if (f > max_factor * (1 + 1e-9)) {
       const double max_scale = max_factor / pyramid[0].stats.texel_size;
-      if (o.scale <= 0 && o.pixels_per_texel <= 0) {
-        res.scale = max_scale;
-      } else {
-        throw isochart::InputError(
-            "",
-            format("exemplar scale too large: a texel of the finest level would cover %.4g exemplar pixels, "
-                   "shrinking the %dx%d exemplar below 4 pixels across; the largest scale is %.4g exemplar "
-                   "pixels per unit length (%.4g exemplar pixels per texel)",
-                   f, exemplar.width, exemplar.height, max_scale, max_factor));
-      }
+      move_or_refuse(
+          max_scale,
+          format("exemplar scale too large: a texel of the finest level would cover %.4g exemplar pixels, "
+                 "shrinking the %dx%d exemplar below 4 pixels across; the largest scale is %.4g exemplar "
+                 "pixels per unit length (%.4g exemplar pixels per texel)",
+                 f, exemplar.width, exemplar.height, round_down_4(max_scale), round_down_4(max_factor)));
     }
   }
 
@@ -629,18 +634,14 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
     if (searched > kMaxSearchedPixels * (1 + 1e-9)) {
       const double min_factor = std::sqrt(double(exemplar.width) * exemplar.height / kMaxSearchedPixels);
       const double min_scale = min_factor / pyramid[0].stats.texel_size;
-      if (o.scale <= 0 && o.pixels_per_texel <= 0) {
-        res.scale = min_scale;
-      } else {
-        throw isochart::InputError(
-            "",
-            format("exemplar too large at this scale: the %dx%d exemplar at %.4g exemplar pixels per texel "
-                   "would be searched as %.4g pixels (about %.2g GB); at most %.0f (1024x1024) are: use a "
-                   "scale of at least %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel) "
-                   "or a smaller exemplar",
-                   exemplar.width, exemplar.height, f, searched, searched * 1.2e3 / 1e9, kMaxSearchedPixels,
-                   round_up_4(min_scale), round_up_4(min_factor)));
-      }
+      move_or_refuse(
+          min_scale,
+          format("exemplar too large at this scale: the %dx%d exemplar at %.4g exemplar pixels per texel "
+                 "would be searched as %.4g pixels (about %.2g GB); at most %.0f (1024x1024) are: use a "
+                 "scale of at least %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel) "
+                 "or a smaller exemplar",
+                 exemplar.width, exemplar.height, f, searched, searched * 1.2e3 / 1e9, kMaxSearchedPixels,
+                 round_up_4(min_scale), round_up_4(min_factor)));
     }
   }
 

@@ -435,9 +435,16 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(
       run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --scale 1e9",
               err) == 2);
-  CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --scale 1e+09: exemplar scale too large") &&
-                         Catch::Contains("the largest scale is"));
+  const std::string large = line();
+  CHECK_THAT(large, Catch::StartsWith("isocharts: error: --scale 1e+09: exemplar scale too large") &&
+                        Catch::Contains("the largest scale is"));
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt"});
+  // The largest scale named (rounded down, not to the nearest) works.
+  const auto at = large.find("the largest scale is ");
+  REQUIRE(at != std::string::npos);
+  const std::string largest = large.substr(at + 21, large.find(' ', at + 21) - at - 21);
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --scale " + largest,
+                err) == 0);
   // The largest seed is a seed.
   CHECK(run_cli("-q info builtin:sphere --seed 18446744073709551615", err) == 0);
 }
