@@ -876,8 +876,9 @@ void validate_options(const AtlasOptions& o) {
   if (!(o.merge_max_fraction >= 0 && o.merge_max_fraction <= 1)) bad("merge fraction must be in [0, 1]");
   if (o.optimize_passes < 0) bad("optimize passes must be >= 0");
   // The packer's own limit: a larger texture passed here and failed after the atlas was built.
-  if (o.pack.width < 8 || o.pack.height < 8 || o.pack.width > 8192 || o.pack.height > 8192)
-    bad("--width and --height must be between 8 and 8192 texels");
+  constexpr int kMax = PackOptions::kMaxSize;
+  if (o.pack.width < 8 || o.pack.height < 8 || o.pack.width > kMax || o.pack.height > kMax)
+    bad("--width and --height must be between 8 and " + std::to_string(kMax) + " texels");
   if (o.pack.gutter < 0 || o.pack.gutter > 64) bad("--gutter must be between 0 and 64 texels");
   if (!(o.max_geometric_l2 >= 1.0) || !std::isfinite(o.max_geometric_l2))
     bad("the geometric L2 bound of a signal atlas must be a number >= 1");

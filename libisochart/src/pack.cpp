@@ -336,9 +336,10 @@ Search search_scale(const std::vector<Prepared>& prepared, int rotations,
 
 void validate(const PackOptions& o) {
   auto bad = [](const std::string& m) { throw InputError("", m); };
-  if (o.width < 1 || o.width > 8192 || o.height < 1 || o.height > 8192)
-    bad("pack: texture size " + std::to_string(o.width) + "x" + std::to_string(o.height) +
-        " is outside 1..8192");
+  constexpr int kMax = PackOptions::kMaxSize;
+  if (o.width < 1 || o.width > kMax || o.height < 1 || o.height > kMax)
+    bad("pack: texture size " + std::to_string(o.width) + "x" + std::to_string(o.height) + " is outside 1.." +
+        std::to_string(kMax));
   if (o.gutter < 0) bad("pack: gutter " + std::to_string(o.gutter) + " is negative");
   if (o.width - 2 * o.gutter < 1 || o.height - 2 * o.gutter < 1)
     bad("pack: a gutter of " + std::to_string(o.gutter) + " texels leaves no room in a " +

@@ -26,7 +26,9 @@ struct PackChart {
 };
 
 struct PackOptions {
-  /// Target texture size in texels (1..8192 each). The packer works on a canvas of twice
+  /// The largest texture side the packer takes.
+  static constexpr int kMaxSize = 8192;
+  /// Target texture size in texels (1..kMaxSize each). The packer works on a canvas of twice
   /// that size in each direction per order tried: about 4.5·W·H bytes each (5 MB at 1024²,
   /// 300 MB at 8192²).
   int width = 1024;
