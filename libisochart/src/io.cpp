@@ -101,6 +101,12 @@ bool parse_int(std::string_view token, long long& value) {
   return r.ec == std::errc() && r.ptr == end;
 }
 
+bool is_integer_text(std::string_view token) {
+  if (!token.empty() && (token[0] == '-' || token[0] == '+')) token.remove_prefix(1);
+  return !token.empty() &&
+         std::all_of(token.begin(), token.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
 double expect_number(std::string_view& rest, const std::string& path, long long line, const char* what) {
   std::string_view tok;
   if (!next_token(rest, tok)) fail_at_line(path, line, std::string("expected ") + what);

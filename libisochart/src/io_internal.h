@@ -102,6 +102,9 @@ inline bool next_token(std::string_view& s, std::string_view& token) {
 /// caller can name them; out-of-range values and trailing junk do not.
 bool parse_double(std::string_view token, double& value);
 bool parse_int(std::string_view token, long long& value);
+/// True for an optionally signed run of decimal digits, e.g. an index too large for parse_int,
+/// so that readers can call it out of range rather than malformed.
+bool is_integer_text(std::string_view token);
 
 /// Parses the next token on a line as a finite number, or throws naming the line and `what`.
 double expect_number(std::string_view& rest, const std::string& path, long long line, const char* what);

@@ -150,9 +150,14 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
         }
         auto resolve = [&](std::string_view s, std::size_t count, const char* what, MaxRef& max) {
           long long i = 0;
-          if (!parse_int(s, i))
+          if (!parse_int(s, i)) {
+            if (is_integer_text(s))
+              fail_at_line(path, ln,
+                           std::string(what) + " index " + std::string(s) +
+                               " is out of range (too large for any mesh)");
             fail_at_line(path, ln,
                          quoted(tok) + " is not a face corner (expected v, v/vt, v//vn or v/vt/vn)");
+          }
           if (i == 0)
             fail_at_line(path, ln, std::string(what) + " index 0 is invalid (OBJ indices start at 1)");
           if (i < 0) {

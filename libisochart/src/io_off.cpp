@@ -140,7 +140,12 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
         fail_at_line(
             path, ln,
             "face declares " + std::to_string(k) + " corners but lists " + std::to_string(q) + " indices");
-      if (!parse_int(tok, idx)) fail_at_line(path, ln, quoted(tok) + " is not a vertex index");
+      if (!parse_int(tok, idx))
+        fail_at_line(path, ln,
+                     is_integer_text(tok)
+                         ? "vertex index " + std::string(tok) + " is out of range (the file has " +
+                               std::to_string(nv) + " vertices)"
+                         : quoted(tok) + " is not a vertex index");
       if (idx < 0 || idx >= nv)
         fail_at_line(path, ln,
                      "vertex index " + std::to_string(idx) + " is out of range (the file has " +

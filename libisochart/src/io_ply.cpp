@@ -5,6 +5,7 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 
 #include "io_internal.h"
@@ -360,8 +361,13 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
             poly.resize(static_cast<std::size_t>(n));
             for (auto& v : poly) {
               const double x = in.read(p.type);
-              if (!(x >= 0 && x <= INT_MAX))
-                in.fail("vertex index " + std::to_string(static_cast<long long>(x)) + " is out of range");
+              if (!(x >= 0 && x <= INT_MAX) || x != std::floor(x)) {
+                // %.17g, not a cast: 1e20 cast to long long printed as -9223372036854775808.
+                char text[40];
+                std::snprintf(text, sizeof text, "%.17g", x);
+                in.fail(std::string("vertex index ") + text +
+                        (x == std::floor(x) ? " is out of range" : " is not a whole number"));
+              }
               v = static_cast<int>(x);
             }
           } else if (is_face && p.role == Role::TexCoord) {

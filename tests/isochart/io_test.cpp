@@ -265,6 +265,11 @@ TEST_CASE("OBJ: parse errors name the line", "[io]") {
         "line 5: vertex index 9 is out of range (the file has 3 vertices)");
   CHECK(err("f 1/1 2/1 3/1\n") ==
         "line 4: texture coordinate index 1 is out of range (the file has 0 texture coordinates)");
+  // An index too large for a long long is out of range, not malformed.
+  CHECK(err("f 1 2 99999999999999999999\n") ==
+        "line 4: vertex index 99999999999999999999 is out of range (too large for any mesh)");
+  CHECK(err("f 1/1 2/-99999999999999999999 3/1\n") ==
+        "line 4: texture coordinate index -99999999999999999999 is out of range (too large for any mesh)");
   CHECK_THAT(err("f 1/x 2 3\n"), Catch::Contains("line 4: '1/x' is not a face corner"));
   CHECK_THAT(err("f 1/1/1/1 2 3\n"), Catch::Contains("is not a face corner"));
   CHECK(err("vt 0 0\nf 1/1 2 3\n") == "line 5: face mixes corners with and without texture coordinates");
@@ -344,6 +349,8 @@ TEST_CASE("OFF: errors name the line", "[io]") {
   CHECK_THAT(err("OFF\n2000000000 2000000000 0\n0 0 0\n"),
              Catch::Contains("line 2: header declares 2000000000 vertices"));
   CHECK_THAT(err("OFF\n-3 1 0\n"), Catch::Contains("out of range"));
+  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 99999999999999999999\n") ==
+        "line 6: vertex index 99999999999999999999 is out of range (the file has 3 vertices)");
   CHECK(err("OFF\n3 1 0\n0 0 inf\n1 0 0\n0 1 0\n3 0 1 2\n") == "line 3: value 'inf' is not finite");
   CHECK(err("OFF BINARY\n") == "line 1: binary OFF is not supported");
   // Faces past the declared count were dropped without a word; comments after the end are fine.
@@ -465,6 +472,11 @@ TEST_CASE("PLY: errors name the line or the element", "[io]") {
         "line 11: vertex 1: expected more values on this line");
   CHECK(load_error(d.write("a2.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 -2\n")) ==
         "line 13: face 0: vertex index -2 is out of range");
+  // Indices are read as doubles; one beyond a long long used to print as -9223372036854775808.
+  CHECK(load_error(d.write("a3.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 99999999999999999999\n")) ==
+        "line 13: face 0: vertex index 1e+20 is out of range");
+  CHECK(load_error(d.write("a4.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 1.5\n")) ==
+        "line 13: face 0: vertex index 1.5 is not a whole number");
   CHECK(load_error(d.write("a3.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n")) ==
         "face 0 refers to vertex 3, but there are only 3 vertices");
   CHECK(load_error(d.write("a4.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n")) ==
