@@ -1350,66 +1350,105 @@ Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, 
     }
     return total;
   };
+  // Colour of chart c at atlas texel position p (texel units), from the chart's samples.
+  auto shade = [&](int c, const Vec2d& p, double* v) {
+    const Eigen::Vector3d a(p.x / size, p.y / size, 1);
+    const Eigen::Vector2d xy = affine[c].transpose() * a;
+    if (!(std::fabs(xy.x()) < 1e6 && std::fabs(xy.y()) < 1e6)) return 0.0;
+    // Bilinear over the chart's samples, renormalized where the footprint leaves it.
+    const double fx = xy.x() - 0.5, fy = xy.y() - 0.5;
+    const int ix = static_cast<int>(std::floor(fx)), iy = static_cast<int>(std::floor(fy));
+    const double ax = fx - ix, ay = fy - iy;
+    double wsum = 0;
+    int smp[4], n = 0;
+    double wts[4];
+    for (int k = 0; k < 4; ++k) {
+      const int sx = ix + (k & 1), sy = iy + (k >> 1);
+      if (sx < 0 || sy < 0 || sx >= g.width || sy >= g.height || g.chart[g.index(sx, sy)] != c) continue;
+      const double wgt = ((k & 1) ? ax : 1 - ax) * ((k >> 1) ? ay : 1 - ay);
+      if (wgt <= 0) continue;
+      smp[n] = g.index(sx, sy), wts[n] = wgt, ++n;
+    }
+    if (n > 0) wsum = blend(smp, wts, n, xy.x(), xy.y(), v);
+    if (wsum <= 0) {
+      // Outside the chart's samples (its boundary): the nearest sample of the chart.
+      const int cx = static_cast<int>(std::lround(fx)), cy = static_cast<int>(std::lround(fy));
+      double best = std::numeric_limits<double>::infinity();
+      for (int r = 1; r <= 4 && !std::isfinite(best); ++r)
+        for (int sy = cy - r; sy <= cy + r; ++sy)
+          for (int sx = cx - r; sx <= cx + r; ++sx) {
+            if (sx < 0 || sy < 0 || sx >= g.width || sy >= g.height || g.chart[g.index(sx, sy)] != c)
+              continue;
+            const double d = (sx - fx) * (sx - fx) + (sy - fy) * (sy - fy);
+            if (d < best) {
+              best = d;
+              const int one = g.index(sx, sy);
+              const double w1 = 1;
+              wsum = blend(&one, &w1, 1, xy.x(), xy.y(), v);
+            }
+          }
+    }
+    return wsum;
+  };
+  // A chart whose samples do not span an affine map (fewer than three, or all on one line: a
+  // needle) is coloured by its sample nearest in the atlas's uv.
+  auto shade_unfitted = [&](int c, const Vec2d& p, double* v) {
+    const Vec2d uv{p.x / size, p.y / size};
+    double best = std::numeric_limits<double>::infinity();
+    int nearest = -1;
+    for (int smp = 0; smp < g.width * g.height; ++smp) {
+      if (g.chart[smp] != c || g.face[smp] < 0 || g.face[smp] >= nf) continue;
+      const Vec2d d = face_uv(g.face[smp], g.barycentric[smp]) - uv;
+      if (d.x * d.x + d.y * d.y < best) best = d.x * d.x + d.y * d.y, nearest = smp;
+    }
+    if (nearest < 0) return 0.0;
+    const double w1 = 1;
+    return blend(&nearest, &w1, 1, nearest % g.width + 0.5, nearest / g.width + 0.5, v);
+  };
+  auto put = [&](int x, int y, const double* v, double wsum) {
+    const int row = size - 1 - y;
+    for (int ch = 0; ch < 3; ++ch) out.at(x, row, ch) = static_cast<float>(v[ch] / wsum);
+    filled[static_cast<std::size_t>(row) * size + x] = 1;
+  };
   for (int f = 0; f < nf; ++f) {
     const int c = face_chart[f];
-    if (c < 0 || !fitted[c]) continue;
+    if (c < 0) continue;
     const auto& fu = atlas.face_uvs[f];
     const Vec2d p0 = atlas.uvs[fu[0]] * size, p1 = atlas.uvs[fu[1]] * size, p2 = atlas.uvs[fu[2]] * size;
     const double area = isochart::signed_area(p0, p1, p2);
-    if (std::fabs(area) < 1e-14) continue;
-    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({p0.x, p1.x, p2.x}))));
-    const int x1 = std::min(size - 1, static_cast<int>(std::ceil(std::max({p0.x, p1.x, p2.x}))));
-    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({p0.y, p1.y, p2.y}))));
-    const int y1 = std::min(size - 1, static_cast<int>(std::ceil(std::max({p0.y, p1.y, p2.y}))));
-    for (int y = y0; y <= y1; ++y) {
-      for (int x = x0; x <= x1; ++x) {
-        const Vec2d p{x + 0.5, y + 0.5};
-        const double b0 = isochart::signed_area(p, p1, p2) / area, b1 = isochart::signed_area(p0, p, p2) / area;
-        const double b2 = 1 - b0 - b1;
-        const double eps = -1e-6;
-        if (b0 < eps || b1 < eps || b2 < eps) continue;
-        const Vec2d uv{p.x / size, p.y / size};
-        const Eigen::Vector3d a(uv.x, uv.y, 1);
-        const Eigen::Vector2d xy = affine[c].transpose() * a;
-        if (!(std::fabs(xy.x()) < 1e6 && std::fabs(xy.y()) < 1e6)) continue;
-        // Bilinear over the chart's samples, renormalized where the footprint leaves it.
-        const double fx = xy.x() - 0.5, fy = xy.y() - 0.5;
-        const int ix = static_cast<int>(std::floor(fx)), iy = static_cast<int>(std::floor(fy));
-        const double ax = fx - ix, ay = fy - iy;
-        double v[3] = {0, 0, 0}, wsum = 0;
-        int smp[4], n = 0;
-        double wts[4];
-        for (int k = 0; k < 4; ++k) {
-          const int sx = ix + (k & 1), sy = iy + (k >> 1);
-          if (sx < 0 || sy < 0 || sx >= g.width || sy >= g.height || g.chart[g.index(sx, sy)] != c) continue;
-          const double wgt = ((k & 1) ? ax : 1 - ax) * ((k >> 1) ? ay : 1 - ay);
-          if (wgt <= 0) continue;
-          smp[n] = g.index(sx, sy), wts[n] = wgt, ++n;
+    bool wrote = false;
+    if (fitted[c] && std::fabs(area) >= 1e-14) {
+      const int x0 = std::max(0, static_cast<int>(std::floor(std::min({p0.x, p1.x, p2.x}))));
+      const int x1 = std::min(size - 1, static_cast<int>(std::ceil(std::max({p0.x, p1.x, p2.x}))));
+      const int y0 = std::max(0, static_cast<int>(std::floor(std::min({p0.y, p1.y, p2.y}))));
+      const int y1 = std::min(size - 1, static_cast<int>(std::ceil(std::max({p0.y, p1.y, p2.y}))));
+      for (int y = y0; y <= y1; ++y) {
+        for (int x = x0; x <= x1; ++x) {
+          const Vec2d p{x + 0.5, y + 0.5};
+          const double b0 = isochart::signed_area(p, p1, p2) / area,
+                       b1 = isochart::signed_area(p0, p, p2) / area;
+          const double b2 = 1 - b0 - b1;
+          const double eps = -1e-6;
+          if (b0 < eps || b1 < eps || b2 < eps) continue;
+          double v[3] = {0, 0, 0};
+          const double wsum = shade(c, p, v);
+          if (wsum <= 0) continue;
+          put(x, y, v, wsum);
+          wrote = true;
         }
-        if (n > 0) wsum = blend(smp, wts, n, xy.x(), xy.y(), v);
-        if (wsum <= 0) {
-          // Outside the chart's samples (its boundary): the nearest sample of the chart.
-          const int cx = static_cast<int>(std::lround(fx)), cy = static_cast<int>(std::lround(fy));
-          double best = std::numeric_limits<double>::infinity();
-          for (int r = 1; r <= 4 && !std::isfinite(best); ++r)
-            for (int sy = cy - r; sy <= cy + r; ++sy)
-              for (int sx = cx - r; sx <= cx + r; ++sx) {
-                if (sx < 0 || sy < 0 || sx >= g.width || sy >= g.height || g.chart[g.index(sx, sy)] != c) continue;
-                const double d = (sx - fx) * (sx - fx) + (sy - fy) * (sy - fy);
-                if (d < best) {
-                  best = d;
-                  const int one = g.index(sx, sy);
-                  const double w1 = 1;
-                  wsum = blend(&one, &w1, 1, xy.x(), xy.y(), v);
-                }
-              }
-        }
-        if (wsum <= 0) continue;
-        const int row = size - 1 - y;
-        for (int ch = 0; ch < 3; ++ch) out.at(x, row, ch) = static_cast<float>(v[ch] / wsum);
-        filled[static_cast<std::size_t>(row) * size + x] = 1;
       }
     }
+    if (wrote) continue;
+    // A face covering no texel centre (a sliver, or smaller than a texel) still colours the
+    // texel under its centroid, unless another face did: a chart made only of such faces came
+    // out black, with nothing for the gutter fill to spread.
+    const Vec2d pc = (p0 + p1 + p2) * (1.0 / 3);
+    if (!(pc.x >= 0 && pc.y >= 0 && pc.x < size && pc.y < size)) continue;
+    const int x = static_cast<int>(pc.x), y = static_cast<int>(pc.y);
+    if (filled[static_cast<std::size_t>(size - 1 - y) * size + x]) continue;
+    double v[3] = {0, 0, 0};
+    const double wsum = fitted[c] ? shade(c, pc, v) : shade_unfitted(c, pc, v);
+    if (wsum > 0) put(x, y, v, wsum);
   }
   fill_gutter(out, filled);
   return out;

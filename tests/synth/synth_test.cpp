@@ -659,6 +659,31 @@ TEST_CASE("the atlas texture reads the exemplar where the samples' positions con
   CHECK_THROWS_AS(synth::transfer_to_atlas(atlas, other_level[0], r.texture, size, &r, &ex), isochart::InputError);
 }
 
+TEST_CASE("a chart of slivers covering no texel centre still gets the synthesized colour", "[synth]") {
+  // One triangle 1 long and 1e-9 high, its chart a needle along the texture's diagonal: no
+  // atlas texel centre lies inside it, and the texture came out all black.
+  isochart::Mesh atlas;
+  atlas.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, 1e-9, 0}};
+  atlas.faces = {{0, 1, 2}};
+  atlas.uvs = {{0.01, 0.01}, {0.99, 0.99}, {0.5, 0.5 + 1e-9}};
+  atlas.face_uvs = {{0, 1, 2}};
+  mcgim::PyramidOptions po;
+  po.sizes = {{64, 64}, {32, 32}};
+  po.level.optimize = false;
+  const auto pyramid = mcgim::build_pyramid(atlas, po);
+  REQUIRE(pyramid[0].image.defined_samples() > 0);
+  const Image ex = synth::make_exemplar("bricks", 64);
+  const synth::SynthResult r = synth::synthesize(atlas, pyramid, ex, {});
+  for (const Image& t : {synth::transfer_to_atlas(atlas, pyramid[0], r.texture, 256),
+                         synth::transfer_to_atlas(atlas, pyramid[0], r.texture, 256, &r, &ex)}) {
+    float darkest = 1;
+    for (int y = 0; y < t.height; ++y)
+      for (int x = 0; x < t.width; ++x)
+        darkest = std::min(darkest, std::max({t.at(x, y, 0), t.at(x, y, 1), t.at(x, y, 2)}));
+    CHECK(darkest > 0.05f);
+  }
+}
+
 TEST_CASE("an exemplar too large to search at the scale asked for is refused with the scale that works",
           "[synth]") {
   // 1100² pixels at one exemplar pixel per texel: 1.21 M pixels to search, over the 1024² that
