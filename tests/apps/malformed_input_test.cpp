@@ -613,3 +613,19 @@ TEST_CASE("a long thin chart in a square texture gets a warning naming the remed
                 err) == 0);
   CHECK(read_bytes(err).empty());
 }
+
+TEST_CASE("synth warns when --direction is along the surface normal", "[cli]") {
+  // On a flat square seen face-on, (0,0,1) has no direction along the surface; the field then
+  // follows another axis, which the user should hear about.
+  TempDir tmp("direction");
+  const fs::path square = tmp.path / "square.obj", err = tmp.path / "err.txt";
+  write_bytes(square, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  const std::string run =
+      "synth '" + square.string() + "' --levels 32,16 -o '" + (tmp.path / "s.glb").string() + "'";
+  CHECK(run_cli(run + " --direction 0,0,1", err) == 0);
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("square.obj: --direction 0,0,1 is within 17 degrees of the surface "
+                             "normal on 100 % of the surface"));
+  CHECK(run_cli(run + " --direction 1,0,0.2", err) == 0);
+  CHECK_THAT(read_bytes(err), !Catch::Contains("--direction"));
+}
