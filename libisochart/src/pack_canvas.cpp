@@ -233,9 +233,10 @@ void Canvas::update_blocks(int x0, int y0, int x1, int y1) {
         count += popcount((bits_[static_cast<std::size_t>(y) * row_words_ + word] >> bit) & 0xFFu);
       block_count_[static_cast<std::size_t>(by) * blocks_x_ + bx] = count;
     }
+  // Only sums over rectangles reaching past (bx0, by0) changed: the entries right of and above it.
   const int stride = blocks_x_ + 1;
   for (int by = by0; by < blocks_y_; ++by)
-    for (int bx = 0; bx < blocks_x_; ++bx)
+    for (int bx = bx0; bx < blocks_x_; ++bx)
       block_sat_[static_cast<std::size_t>(by + 1) * stride + bx + 1] =
           block_count_[static_cast<std::size_t>(by) * blocks_x_ + bx] +
           block_sat_[static_cast<std::size_t>(by) * stride + bx + 1] +
