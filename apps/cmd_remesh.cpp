@@ -21,6 +21,10 @@ namespace cli {
 
 namespace {
 
+// About 600 bytes per sample at 2048² (2.4 GB, 14 s on eight.off); 4096² took over 14 GB and
+// 300 s without finishing, so 2048 a side is the limit, --samples included.
+constexpr int kMaxSide = 2048;
+
 struct RemeshArgs {
   std::string input;
   std::string output;
@@ -178,7 +182,12 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     for (int r : a.levels) sizes.push_back({r, r});
   } else if (a.samples > 0) {
     const mcgim::ResolutionChoice rc =
-        for_atlas([&] { return mcgim::choose_resolution(atlas, a.samples, lo, ctx.progress()); });
+        for_atlas([&] { return mcgim::choose_resolution(atlas, a.samples, lo, ctx.progress(), kMaxSide); });
+    if (rc.capped)
+      ctx.warn(a.input, "--samples " + std::to_string(a.samples) + " needs an image larger than " +
+                            std::to_string(kMaxSide) + "x" + std::to_string(kMaxSide) +
+                            ", the largest remesh; it holds " + std::to_string(rc.defined_samples) +
+                            " defined samples of this atlas");
     sizes.push_back({rc.width, rc.height});
     search["target_samples"] = a.samples;
     search["resolution"] = {rc.width, rc.height};
@@ -308,20 +317,21 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
   CLI::App* sub = app.add_subcommand(
       "remesh", "Multi-chart geometry images and their watertight remeshes (one level or a pyramid)");
   sub->add_option("input", args->input, "Mesh file (OBJ/OFF/PLY/glTF) or builtin:NAME")->required();
-  sub->add_option("-o,--output", args->output, "Remesh of the finest level (.ply, .obj or .glb); "
-                                                "coarser levels get _RES before the extension")
+  sub->add_option("-o,--output", args->output,
+                  "Remesh of the finest level (.ply, .obj or .glb); "
+                  "coarser levels get _RES before the extension")
       ->required();
-  // About 600 bytes per sample at 2048² (2.4 GB, 14 s on eight.off); 4096² took over 14 GB and
-  // 300 s without finishing, so 2048 a side is the limit.
-  sub->add_option("--res", args->res, "Square image resolution (default 256; at most 2048, ~600 bytes a sample)")
-      ->check(CLI::Range(2, 2048));
-  sub->add_option("--samples", args->samples, "Choose the square resolution giving about N defined samples")
+  sub->add_option("--res", args->res,
+                  "Square image resolution (default 256; at most 2048, ~600 bytes a sample)")
+      ->check(CLI::Range(2, kMaxSide));
+  sub->add_option("--samples", args->samples,
+                  "Choose the square resolution giving about N defined samples (at most 2048x2048)")
       ->check(CLI::Range(16LL, 4'194'304LL));
-  sub->add_option("--width", args->width, "Image width (with --height)")->check(CLI::Range(2, 2048));
-  sub->add_option("--height", args->height, "Image height (with --width)")->check(CLI::Range(2, 2048));
+  sub->add_option("--width", args->width, "Image width (with --height)")->check(CLI::Range(2, kMaxSide));
+  sub->add_option("--height", args->height, "Image height (with --width)")->check(CLI::Range(2, kMaxSide));
   sub->add_option("--levels", args->levels, "Pyramid of square resolutions, e.g. 256,128,64,32")
       ->delimiter(',')
-      ->check(CLI::Range(2, 2048));
+      ->check(CLI::Range(2, kMaxSide));
   sub->add_option("--atlas", args->atlas, "Use this atlas (a mesh with texture coordinates) instead of "
                                           "building the iso-chart atlas of the input");
   sub->add_option("--exr", args->exr, "Write each level as PREFIX_WxH.exr (float positions, normals, "

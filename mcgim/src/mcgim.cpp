@@ -209,8 +209,10 @@ std::vector<Level> build_pyramid(const isochart::Mesh& atlas, const PyramidOptio
 }
 
 ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target, const LevelOptions& options,
-                                   const isochart::Progress& progress) {
+                                   const isochart::Progress& progress, int max_side) {
   if (target < 16) throw isochart::InputError("", "the sample budget must be at least 16");
+  if (max_side < 4 || max_side > 16384)
+    throw isochart::InputError("", "the largest side must be in 4..16384");
   const detail::AtlasCharts a = detail::prepare_atlas(atlas);
   LevelOptions o = options;
   ResolutionChoice best;
@@ -230,7 +232,7 @@ ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target
   // Coverage grows about with the square of the resolution (the packer fills a similar
   // fraction of any size): iterate on that model until within 1% of the budget. Each trial
   // packs the atlas, which can be slow for thousands of charts, so trials are few.
-  int res = std::clamp(static_cast<int>(std::lround(std::sqrt(target / 0.6))), 4, 16384);
+  int res = std::clamp(static_cast<int>(std::lround(std::sqrt(target / 0.6))), 4, max_side);
   std::vector<int> tried;
   for (int it = 0; it < 5; ++it) {
     if (std::find(tried.begin(), tried.end(), res) != tried.end()) break;
@@ -238,7 +240,12 @@ ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target
     const long long n = trial(res);
     if (std::llabs(n - target) <= target / 100) break;
     const double scale = n > 0 ? std::sqrt(static_cast<double>(target) / n) : 2.0;
-    res = std::clamp(static_cast<int>(std::lround(res * scale)), 4, 16384);
+    const int wanted = static_cast<int>(std::clamp(std::lround(res * scale), 4L, 1L << 20));
+    if (wanted > max_side && res == max_side) {
+      best.capped = true;
+      break;
+    }
+    res = std::min(wanted, max_side);
   }
   return best;
 }

@@ -313,7 +313,15 @@ TEST_CASE("the resolution search reaches the sample budget", "[mcgim]") {
     CHECK(std::abs(c.defined_samples - target) < 0.05 * target);
     o.width = o.height = c.width;
     CHECK(std::abs(build_level(m, o).stats.defined_samples - target) < 0.06 * target);
+    CHECK(!c.capped);
   }
+  // A budget beyond the largest side stops there and says so (--samples went past the CLI's
+  // 2048 limit and ran out of memory).
+  o.width = o.height = 0;
+  const ResolutionChoice capped = choose_resolution(m, 8000, o, {}, 64);
+  CHECK(capped.width == 64);
+  CHECK(capped.capped);
+  CHECK(capped.defined_samples < 8000);
 }
 
 TEST_CASE("geometry images are written as EXR and PNG", "[mcgim][io]") {

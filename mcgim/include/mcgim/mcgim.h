@@ -144,11 +144,14 @@ struct ResolutionChoice {
   int width = 0, height = 0;
   long long defined_samples = 0;  ///< samples covered at that resolution (before disk cleanup)
   int trials = 0;
+  bool capped = false;  ///< the budget needs a side beyond max_side; this is max_side
 };
 
-/// Searches the square resolution whose packed atlas covers about `target_samples` samples.
+/// Searches the square resolution whose packed atlas covers about `target_samples` samples,
+/// with sides of at most `max_side` (a level takes about 600 bytes a sample: 2.4 GB at 2048²).
+/// `capped` in the result says that the budget needed more.
 ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target_samples,
-                                   const LevelOptions& options = {},
-                                   const isochart::Progress& progress = {});
+                                   const LevelOptions& options = {}, const isochart::Progress& progress = {},
+                                   int max_side = 16384);
 
 }  // namespace mcgim
