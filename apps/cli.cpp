@@ -124,9 +124,10 @@ void Context::end_progress() const {
   }
 }
 
-isochart::LoadResult Context::load(const std::string& path) const {
+isochart::LoadResult Context::load(const std::string& path, bool atlas) const {
   isochart::LoadOptions lo;
   lo.repair = !opts.no_repair;
+  lo.weld = atlas;
   isochart::LoadResult r = isochart::load_mesh(path, lo);
   for (const auto& w : r.report.warnings) warn(path, w);
   return r;

@@ -42,7 +42,9 @@ struct Context {
   /// Clears the progress line (call before printing results).
   void end_progress() const;
   /// Loads a mesh with the global repair setting, printing repair warnings.
-  isochart::LoadResult load(const std::string& path) const;
+  /// Loads a mesh, warning about what was repaired. An atlas (a mesh laid out in UV by any
+  /// tool) has its corners at equal positions joined, as tools split vertices at UV seams.
+  isochart::LoadResult load(const std::string& path, bool atlas = false) const;
   /// Refuses, before any work, an output (the --report file included) that is one of the
   /// inputs or another output; the writers check again at the end (outputs named later).
   void check_paths(const std::vector<std::string>& inputs, std::vector<std::string> outputs) const;

@@ -11,6 +11,7 @@
 #include "isochart/atlas.h"
 #include "isochart/builtin.h"
 #include "isochart/error.h"
+#include "isochart/mesh.h"
 #include "isochart/signal.h"
 #include "isochart/stretch.h"
 #include "mcgim/image_io.h"
@@ -61,10 +62,10 @@ std::string image_path(const std::string& prefix, int w, int h, const char* ext)
   return prefix + "_" + std::to_string(w) + "x" + std::to_string(h) + ext;
 }
 
-isochart::Mesh load_any(const Context& ctx, const std::string& path) {
+isochart::Mesh load_any(const Context& ctx, const std::string& path, bool atlas = false) {
   const std::string prefix = "builtin:";
   if (path.rfind(prefix, 0) == 0) return isochart::make_builtin(path.substr(prefix.size()));
-  return ctx.load(path).mesh;
+  return ctx.load(path, atlas).mesh;
 }
 
 // An external atlas must lay out the input's surface (its own vertices and faces may be split
@@ -122,10 +123,22 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   isochart::Mesh atlas;
   const auto ta = std::chrono::steady_clock::now();
   if (!a.atlas.empty()) {
-    atlas = load_any(ctx, a.atlas);
+    atlas = load_any(ctx, a.atlas, true);
     if (!atlas.has_uvs())
       throw isochart::InputError(a.atlas, "the atlas has no texture coordinates (vt)");
     check_atlas_matches(input, atlas, a.atlas);
+    {
+      // The remesh is of the atlas's surface; one with a face missing or a seam left open
+      // (a hole in a closed input) passes the size check above, so say so.
+      const isochart::Topology ti(input), ta(atlas);
+      if (ti.euler_characteristic() != ta.euler_characteristic() ||
+          ti.boundary_loops().size() != ta.boundary_loops().size())
+        ctx.warn(a.atlas, "the atlas's surface has euler characteristic " +
+                              std::to_string(ta.euler_characteristic()) + " and " +
+                              std::to_string(ta.boundary_loops().size()) + " boundary loops, the input's " +
+                              std::to_string(ti.euler_characteristic()) + " and " +
+                              std::to_string(ti.boundary_loops().size()) + "; the remesh follows the atlas");
+    }
     atlas_json["source"] = a.atlas;
     // Folded or overlapping charts sample one place of the surface for two: the remesh folds
     // there (an atlas tiled three times over gave 22.8 dB where its own layout gives 76.7).

@@ -37,7 +37,7 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   const int width = a.width > 0 ? a.width : a.res;
   const int height = a.height > 0 ? a.height : a.res;
   ctx.check_paths({a.input, a.source, signal_texture(a.signal)}, {a.texture_out, a.imt_out});
-  isochart::Mesh mesh = ctx.load(a.input).mesh;
+  isochart::Mesh mesh = ctx.load(a.input, true).mesh;
   if (!mesh.has_uvs())
     throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
   // The signal lives on the source mesh (same vertices and faces) when one is given: e.g. its

@@ -22,7 +22,7 @@ nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::js
 void run_stats(const Context& ctx, const StatsArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   ctx.check_paths({a.input}, {});
-  isochart::LoadResult r = ctx.load(a.input);
+  isochart::LoadResult r = ctx.load(a.input, true);
   if (!r.mesh.has_uvs())
     throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
   isochart::AtlasQuality q = isochart::measure_atlas(r.mesh);

@@ -240,7 +240,7 @@ RawMesh read_raw_mesh(const std::string& path, const LoadOptions& options) {
 LoadResult load_mesh(const std::string& path, const LoadOptions& options) {
   RawMesh raw = read_raw_mesh(path, options);
   const MeshFormat fmt = format_from_path(path);
-  if (fmt == MeshFormat::Gltf || fmt == MeshFormat::Glb) io_detail::weld_equal_positions(raw);
+  if (options.weld || fmt == MeshFormat::Gltf || fmt == MeshFormat::Glb) io_detail::weld_equal_positions(raw);
   // The limit is on triangles, so polygons count with their triangulation.
   long long triangles = 0;
   for (const auto& poly : raw.polygons)

@@ -629,3 +629,30 @@ TEST_CASE("synth warns when --direction is along the surface normal", "[cli]") {
   CHECK(run_cli(run + " --direction 1,0,0.2", err) == 0);
   CHECK_THAT(read_bytes(err), !Catch::Contains("--direction"));
 }
+
+TEST_CASE("remesh --atlas warns when the atlas's surface is not the input's topology", "[cli]") {
+  // The size check passes an atlas with one face left out; the remesh then has a hole that the
+  // PSNR (measured against the atlas) does not show.
+  TempDir tmp("atlas_topology");
+  const fs::path atlas = tmp.path / "a.obj", holed = tmp.path / "holed.obj", err = tmp.path / "err.txt";
+  REQUIRE(run_cli("-q atlas builtin:sphere -o '" + atlas.string() + "'", err) == 0);
+  std::istringstream in(read_bytes(atlas));
+  std::string text, line;
+  bool dropped = false;
+  while (std::getline(in, line)) {
+    if (!dropped && line.rfind("f ", 0) == 0) {
+      dropped = true;
+      continue;
+    }
+    text += line + "\n";
+  }
+  write_bytes(holed, text);
+  const std::string run =
+      "remesh builtin:sphere --res 32 --no-psnr -o '" + (tmp.path / "r.ply").string() + "' --atlas ";
+  CHECK(run_cli(run + "'" + atlas.string() + "'", err) == 0);
+  CHECK_THAT(read_bytes(err), !Catch::Contains("euler characteristic"));
+  CHECK(run_cli(run + "'" + holed.string() + "'", err) == 0);
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("holed.obj: the atlas's surface has euler characteristic 1 and 1 "
+                             "boundary loops, the input's 2 and 0; the remesh follows the atlas"));
+}

@@ -181,6 +181,35 @@ TEST_CASE("OBJ: a statement may continue on the next line after a backslash", "[
         "line 5: vertex index 9 is out of range (the file has 3 vertices)");
 }
 
+TEST_CASE("atlases split at their UV seams are joined again when asked", "[io]") {
+  // A tetrahedron written as other tools write atlases: one vertex per (position, UV), so every
+  // face is its own piece. Loaded as an atlas it is one closed surface, UVs kept per corner.
+  TempDir d;
+  std::string obj;
+  const char* corners[4] = {"0 0 0", "1 0 0", "0 1 0", "0 0 1"};
+  const int tris[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  for (const auto& t : tris)
+    for (int k = 0; k < 3; ++k) obj += std::string("v ") + corners[t[k]] + "\n";
+  for (int f = 0; f < 4; ++f)
+    obj += "vt " + std::to_string(0.25 * f) + " 0\nvt " + std::to_string(0.25 * f + 0.2) + " 0\nvt " +
+           std::to_string(0.25 * f) + " 0.2\n";
+  for (int f = 0; f < 4; ++f) {
+    obj += "f";
+    for (int k = 1; k <= 3; ++k) obj += " " + std::to_string(3 * f + k) + "/" + std::to_string(3 * f + k);
+    obj += "\n";
+  }
+  const std::string path = d.write("split.obj", obj);
+  CHECK(load_mesh(path).mesh.num_vertices() == 12);  // a mesh file keeps its pieces
+  LoadOptions lo;
+  lo.weld = true;
+  const Mesh m = load_mesh(path, lo).mesh;
+  CHECK(m.num_vertices() == 4);
+  CHECK(Topology(m).boundary_loops().empty());
+  CHECK(Topology(m).euler_characteristic() == 2);
+  REQUIRE(m.uvs.size() == 12);
+  CHECK(m.uvs[m.face_uvs[3][0]].x == Approx(0.75));
+}
+
 TEST_CASE("OBJ: colours, normals, UVs and groups", "[io]") {
   TempDir d;
   const std::string path =

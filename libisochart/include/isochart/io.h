@@ -35,6 +35,10 @@ struct LoadOptions {
   /// Refuse meshes with more faces than this (after triangulation), to fail early and
   /// clearly instead of exhausting memory.
   long long max_faces = 20'000'000;
+  /// Join corners at bit-identical positions, texture coordinates staying per corner. glTF
+  /// files are always joined (a vertex per combination of attributes); atlases from other
+  /// tools arrive split at their UV seams in any format (one vertex per position and UV).
+  bool weld = false;
 };
 
 struct LoadResult {
