@@ -25,8 +25,8 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
   isochart::LoadResult r = ctx.load(a.input, true);
   if (!r.mesh.has_uvs())
     throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
-  isochart::AtlasQuality q = isochart::measure_atlas(r.mesh);
-  if (a.aspect != 1) q.stretch = isochart::measure_texture_stretch(r.mesh, a.aspect);
+  const isochart::AtlasQuality q = isochart::measure_atlas(r.mesh, a.aspect);
+  const int turned = q.stretch.flipped - q.stretch.degenerate;
 
   nlohmann::json j;
   j["file"] = a.input;
@@ -35,7 +35,9 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
   j["aspect"] = a.aspect;
   j["l2_stretch"] = finite_or_null(q.stretch.l2);
   j["linf_stretch"] = finite_or_null(q.stretch.linf);
-  j["flipped"] = q.stretch.flipped;
+  j["flipped"] = turned;
+  j["zero_area_uv"] = q.stretch.degenerate;
+  j["mirrored_charts"] = q.mirrored_charts;
   j["overlapping_pairs"] = q.overlapping_pairs;
   j["packing_ratio"] = q.packing_ratio;
   j["seam_length"] = q.seam_length;
@@ -50,11 +52,12 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
     << "  charts              " << q.charts << "\n"
     << "  L2 stretch          " << q.stretch.l2 << "\n"
     << "  Linf stretch        " << q.stretch.linf << "\n"
-    << "  flipped triangles   " << q.stretch.flipped << "\n"
+    << "  flipped triangles   " << turned << " (against their chart)\n"
+    << "  zero-area in UV     " << q.stretch.degenerate << "\n"
+    << "  mirrored charts     " << q.mirrored_charts << "\n"
     << "  overlapping pairs   " << q.overlapping_pairs << "\n"
     << "  packing ratio       " << q.packing_ratio << "\n"
-    << "  seam length         " << q.seam_length << " (" << q.seam_length_relative
-    << " x sqrt(area))\n";
+    << "  seam length         " << q.seam_length << " (" << q.seam_length_relative << " x sqrt(area))\n";
   ctx.emit(j, t.str());
 }
 

@@ -63,7 +63,9 @@ def main():
         stats = json.loads(run([a.bin, "stats", obj, "--json", "-q"])[0])
         row = {"mesh": name, "faces": atlas["faces"], "charts": stats["charts"],
                "charts_before_merge": atlas["charts_before_merge"], "l2": stats["l2_stretch"],
-               "linf": stats["linf_stretch"], "packing": stats["packing_ratio"], "flipped": stats["flipped"],
+               "linf": stats["linf_stretch"], "packing": stats["packing_ratio"],
+               # A zero-area or mirrored triangle breaks a texture as a flipped one does.
+               "flipped": stats["flipped"] + stats["zero_area_uv"] + (stats["faces"] if stats["mirrored_charts"] else 0),
                "overlaps": stats["overlapping_pairs"], "seconds": round(seconds, 2), "peak_mb": round(peak),
                "stages": atlas["seconds"]}
         rows.append(row)

@@ -54,6 +54,7 @@ StretchStats accumulate(int nfaces, Corners corners) {
     metric_tensor(q, p, a, b, c, area2);
     if (!(area2 > 0)) {
       ++st.flipped;
+      if (!(area2 < 0)) ++st.degenerate;
       if (st.worst_face < 0 || max_inv < kInf) st.worst_face = i;
       max_inv = kInf;
       continue;
@@ -459,12 +460,28 @@ std::vector<int> uv_charts(const Mesh& mesh, int& num_charts) {
   return uv_charts(mesh, Topology(mesh), num_charts);
 }
 
-AtlasQuality measure_atlas(const Mesh& mesh) {
+AtlasQuality measure_atlas(const Mesh& mesh, double texture_aspect) {
   if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates (vt)");
   AtlasQuality q;
   const Topology topo(mesh);
-  uv_charts(mesh, topo, q.charts);
-  q.stretch = measure_stretch(mesh);
+  const std::vector<int> chart = uv_charts(mesh, topo, q.charts);
+  // A chart is mirrored when most of its UV area is turned over.
+  std::vector<double> turned(q.charts, 0);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Face& t = mesh.face_uvs[f];
+    turned[chart[f]] += signed_area(mesh.uvs[t[0]], mesh.uvs[t[1]], mesh.uvs[t[2]]);
+  }
+  std::vector<char> mirrored(q.charts, 0);
+  for (int c = 0; c < q.charts; ++c) mirrored[c] = turned[c] < 0;
+  q.mirrored_charts = static_cast<int>(std::count(mirrored.begin(), mirrored.end(), 1));
+  q.stretch = accumulate(mesh.num_faces(), [&](int f, Vec3d* pos, Vec2d* p) {
+    const double flip = mirrored[chart[f]] ? -1 : 1;
+    for (int k = 0; k < 3; ++k) {
+      pos[k] = mesh.positions[mesh.faces[f][k]];
+      const Vec2d& uv = mesh.uvs[mesh.face_uvs[f][k]];
+      p[k] = {flip * uv.x * texture_aspect, uv.y};
+    }
+  });
   q.overlapping_pairs = static_cast<long long>(overlapping_uv_pairs(mesh).size());
   q.uv_area = 0;
   bool first = true;

@@ -59,6 +59,32 @@ TEST_CASE("a mirrored map counts as flipped", "[stretch]") {
   CHECK(std::isinf(s.l2));
 }
 
+TEST_CASE("an atlas's mirrored charts are measured unmirrored and counted apart", "[stretch]") {
+  // UVAtlas writes v downwards, so every chart is mirrored: stats called all of bunny's faces
+  // flipped with infinite stretch. Mirroring a whole chart keeps its stretch.
+  const Mesh plain = square_with_map(2, 0, 0, 0.5), mirrored = square_with_map(-2, 0, 0, 0.5);
+  const AtlasQuality p = measure_atlas(plain), m = measure_atlas(mirrored);
+  CHECK(p.mirrored_charts == 0);
+  CHECK(m.mirrored_charts == 1);
+  CHECK(m.stretch.flipped == 0);
+  CHECK(m.stretch.l2 == Approx(p.stretch.l2));
+  CHECK(m.stretch.linf == Approx(p.stretch.linf));
+  CHECK(measure_atlas(mirrored, 2.0).stretch.l2 == Approx(measure_texture_stretch(plain, 2.0).l2));
+  // A triangle turned against the rest of its chart is flipped; one of zero UV area is
+  // counted as degenerate.
+  Mesh folded = square_with_map(1, 0, 0, 1);
+  folded.uvs[3] = {1.5, 0.5};  // the second triangle turns over, still sharing the diagonal
+  const AtlasQuality f = measure_atlas(folded);
+  CHECK(f.stretch.flipped == 1);
+  CHECK(f.stretch.degenerate == 0);
+  Mesh flat = square_with_map(1, 0, 0, 1);
+  flat.uvs[3] = {0.5, 0.5};  // on the diagonal
+  const AtlasQuality z = measure_atlas(flat);
+  CHECK(z.stretch.flipped == 1);
+  CHECK(z.stretch.degenerate == 1);
+  CHECK(std::isinf(z.stretch.l2));
+}
+
 TEST_CASE("exact UV overlap test", "[stretch][overlap]") {
   using T = std::array<Vec2d, 3>;
   const T a{Vec2d{0, 0}, Vec2d{1, 0}, Vec2d{0, 1}};

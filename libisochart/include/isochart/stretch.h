@@ -29,6 +29,7 @@ struct StretchStats {
   double l2 = 0;
   double linf = 0;
   int flipped = 0;        ///< triangles with UV area ≤ 0
+  int degenerate = 0;     ///< of those, triangles with zero UV area (not turned over, but no stretch either)
   double area_3d = 0;     ///< total surface area
   double area_uv = 0;     ///< total |UV area|
   int worst_face = -1;    ///< face reaching linf
@@ -77,6 +78,10 @@ std::vector<int> uv_charts(const Mesh& mesh, int& num_charts);
 /// All the figures `isocharts stats` prints.
 struct AtlasQuality {
   int charts = 0;
+  /// Charts laid out mirrored as a whole (UVAtlas writes v downwards: all of them). Stretch and
+  /// flips are measured with them unmirrored, so `stretch.flipped` counts triangles turned
+  /// against their own chart; a mirrored chart still breaks tangent-space normal maps.
+  int mirrored_charts = 0;
   StretchStats stretch;
   long long overlapping_pairs = 0;
   double packing_ratio = 0;   ///< total UV area / area of the UV bounding box
@@ -85,6 +90,7 @@ struct AtlasQuality {
   double seam_length_relative = 0;  ///< seam_length / sqrt(surface area)
   Vec2d uv_min, uv_max;       ///< UV bounding box
 };
-AtlasQuality measure_atlas(const Mesh& mesh);
+/// `texture_aspect`: as for measure_texture_stretch.
+AtlasQuality measure_atlas(const Mesh& mesh, double texture_aspect = 1);
 
 }  // namespace isochart
