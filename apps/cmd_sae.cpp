@@ -7,6 +7,7 @@
 #include "cli.h"
 #include "isochart/error.h"
 #include "isochart/image.h"
+#include "isochart/mesh.h"
 #include "isochart/signal.h"
 
 namespace cli {
@@ -44,12 +45,30 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   // vertex colours, or a texture through its original texture coordinates.
   isochart::Signal signal;
   if (!a.source.empty()) {
-    const isochart::Mesh src = ctx.load(a.source).mesh;
+    // Joined like the atlas, so that a source split at the same seams numbers alike.
+    const isochart::Mesh src = ctx.load(a.source, true).mesh;
     if (src.num_vertices() != mesh.num_vertices() || src.num_faces() != mesh.num_faces())
       throw isochart::InputError(a.source, "has " + std::to_string(src.num_vertices()) + " vertices and " +
                                                std::to_string(src.num_faces()) + " faces, the atlas " +
                                                std::to_string(mesh.num_vertices()) + " and " +
                                                std::to_string(mesh.num_faces()));
+    // The signal goes to the atlas's vertex of the same number: a re-export that renumbered
+    // the vertices gave a wrong SAE (9x on eight) without a word.
+    const double tolerance = 1e-6 * isochart::bounding_box(mesh).diagonal();
+    for (int v = 0; v < mesh.num_vertices(); ++v)
+      if (!(isochart::norm(src.positions[v] - mesh.positions[v]) <= tolerance)) {
+        std::ostringstream msg;
+        msg << "vertex " << v << " is at (" << src.positions[v].x << ", " << src.positions[v].y << ", "
+            << src.positions[v].z << "), the atlas's at (" << mesh.positions[v].x << ", "
+            << mesh.positions[v].y << ", " << mesh.positions[v].z
+            << "); the source must have the atlas's vertices in the same order";
+        throw isochart::InputError(a.source, msg.str());
+      }
+    for (int f = 0; f < mesh.num_faces(); ++f)
+      if (src.faces[f] != mesh.faces[f])
+        throw isochart::InputError(a.source, "face " + std::to_string(f) +
+                                                 " has other vertices than the atlas's; the source must "
+                                                 "have the atlas's faces in the same order");
     signal = isochart::make_signal(src, a.signal, a.source);
   } else {
     signal = isochart::make_signal(mesh, a.signal, a.input);

@@ -656,3 +656,36 @@ TEST_CASE("remesh --atlas warns when the atlas's surface is not the input's topo
              Catch::Contains("holed.obj: the atlas's surface has euler characteristic 1 and 1 "
                              "boundary loops, the input's 2 and 0; the remesh follows the atlas"));
 }
+
+TEST_CASE("sae --source refuses a source whose vertices are in another order", "[cli]") {
+  // The signal goes to the atlas vertex of the same number; a renumbered re-export of the
+  // source gave a wrong SAE without a word.
+  TempDir tmp("sae_source");
+  const fs::path atlas = tmp.path / "a.obj", shuffled = tmp.path / "shuffled.obj", err = tmp.path / "err.txt";
+  REQUIRE(run_cli("-q atlas builtin:sphere -o '" + atlas.string() + "'", err) == 0);
+  // The same mesh with its vertex list reversed and the faces renumbered to match.
+  std::istringstream in(read_bytes(atlas));
+  std::vector<std::string> vertices, faces;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("v ", 0) == 0) vertices.push_back(line);
+    if (line.rfind("f ", 0) == 0) faces.push_back(line);
+  }
+  const int n = static_cast<int>(vertices.size());
+  std::string text;
+  for (int i = n - 1; i >= 0; --i) text += vertices[i] + "\n";
+  for (const std::string& f : faces) {
+    std::istringstream corners(f.substr(2));
+    std::string c;
+    text += "f";
+    while (corners >> c) text += " " + std::to_string(n + 1 - std::stoi(c.substr(0, c.find('/'))));
+    text += "\n";
+  }
+  write_bytes(shuffled, text);
+  const std::string run = "sae '" + atlas.string() + "' --signal normals --res 64 --source ";
+  CHECK(run_cli(run + "'" + atlas.string() + "'", err) == 0);
+  CHECK(run_cli(run + "'" + shuffled.string() + "'", err) == 2);
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("shuffled.obj: vertex 0 is at") &&
+                 Catch::Contains("the source must have the atlas's vertices in the same order"));
+}
