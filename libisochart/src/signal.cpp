@@ -182,16 +182,22 @@ std::vector<Imt> signal_metric(const Mesh& mesh, const std::vector<Imt>& imt, do
     throw InputError("",
                      "IMT has " + std::to_string(imt.size()) + " faces, the mesh has " + std::to_string(nf));
   const std::vector<double> area = face_areas(mesh);
+  // A face's IMT trace is about the square of its signal's change across it. Below (1e-6)²,
+  // far under an 8-bit step, the signal is flat there: a constant texture, read bilinearly in
+  // float, gave traces of 1e-16 to 1e-14, which the normalization below made a full-weight
+  // metric (76 charts instead of constant colours' 5).
+  constexpr double kFlatTrace = 1e-12;
+  auto flat = [&](int f) { return !(0.5 * (imt[f][0] + imt[f][2]) >= kFlatTrace); };
   double total_area = 0, total_trace = 0;
   for (int f = 0; f < nf; ++f) {
     total_area += area[f];
-    total_trace += 0.5 * (imt[f][0] + imt[f][2]);
+    if (!flat(f)) total_trace += 0.5 * (imt[f][0] + imt[f][2]);
   }
   const double nu = total_area > 0 ? total_trace / total_area : 0;
   std::vector<Imt> g(nf, Imt{1, 0, 1});
   if (!(nu > 0) || !(lambda > 0)) return g;
   for (int f = 0; f < nf; ++f) {
-    if (!(area[f] > 0)) continue;
+    if (!(area[f] > 0) || flat(f)) continue;
     const double s = lambda / (area[f] * nu);
     g[f] = {1 + s * imt[f][0], s * imt[f][1], 1 + s * imt[f][2]};
   }

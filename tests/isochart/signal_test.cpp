@@ -252,6 +252,22 @@ TEST_CASE("metric L2 stretch equals geometric L2 stretch for the identity metric
   for (const Imt& t : g) CHECK((t[0] == 1 && t[1] == 0 && t[2] == 1));
 }
 
+TEST_CASE("a signal flat up to rounding gives the identity metric", "[signal]") {
+  // A constant texture read in float leaves IMT traces of 1e-16..1e-14; normalized by their
+  // mean they became a full-weight metric and split a 5-chart mesh into 76 charts.
+  const Mesh m = plane(6);
+  std::vector<Imt> noise(m.faces.size());
+  for (std::size_t f = 0; f < noise.size(); ++f)
+    noise[f] = {1e-16 * (1 + f % 7), 3e-17 * (f % 3), 2e-15 / (1 + f % 5)};
+  for (const Imt& t : signal_metric(m, noise, 2.0)) CHECK((t[0] == 1 && t[1] == 0 && t[2] == 1));
+  // A real signal on some faces still weighs those, and only those.
+  std::vector<Imt> some = noise;
+  some[0] = {1e-3, 0, 1e-3};
+  const std::vector<Imt> g = signal_metric(m, some, 2.0);
+  CHECK(g[0][0] > 1.5);
+  for (std::size_t f = 1; f < g.size(); ++f) CHECK((g[f][0] == 1 && g[f][1] == 0 && g[f][2] == 1));
+}
+
 TEST_CASE("SAE is tiny for a linear signal and decreases with resolution", "[signal]") {
   // Inset from the texture border, as an atlas with a gutter is (lookups clamp there).
   Mesh m = plane(32);
