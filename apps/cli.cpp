@@ -13,6 +13,7 @@
 #include <mutex>
 
 #include "isochart/error.h"
+#include "isochart/image.h"
 
 namespace cli {
 
@@ -54,6 +55,12 @@ void Context::check_paths(const std::vector<std::string>& inputs, std::vector<st
     if (!S_ISDIR(st.st_mode)) throw isochart::InputError(out, "cannot write: " + dir + " is not a directory");
     if (::access(dir.c_str(), W_OK) != 0)
       throw isochart::InputError(out, "cannot write: " + std::string(std::strerror(errno)));
+    // Outputs are written to a temporary file and renamed, never into a device or a pipe
+    // (/dev/null, /dev/stdout): refused now rather than after the work.
+    if (::stat(out.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+      throw isochart::InputError(out, S_ISDIR(st.st_mode) ? "cannot write: is a directory"
+                                                          : "cannot write: not a regular file (outputs are "
+                                                            "written whole to a file, then renamed)");
     // Nor is a name the file system cannot hold found before the end.
     const std::string name = slash == std::string::npos ? out : out.substr(slash + 1);
     const long name_max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
@@ -122,6 +129,11 @@ void Context::end_progress() const {
     std::fflush(stderr);
     progress_state->shown = false;
   }
+}
+
+void Context::check_image_outputs(const std::vector<std::string>& paths) const {
+  for (const std::string& p : paths)
+    if (!p.empty()) isochart::check_image_output(p);
 }
 
 isochart::LoadResult Context::load(const std::string& path, bool atlas) const {

@@ -45,6 +45,8 @@ struct Context {
   /// Loads a mesh, warning about what was repaired. An atlas (a mesh laid out in UV by any
   /// tool) has its corners at equal positions joined, as tools split vertices at UV seams.
   isochart::LoadResult load(const std::string& path, bool atlas = false) const;
+  /// Image outputs (empty ones skipped): an extension with a writer, checked before any work.
+  void check_image_outputs(const std::vector<std::string>& paths) const;
   /// Refuses, before any work, an output (the --report file included) that is one of the
   /// inputs or another output; the writers check again at the end (outputs named later).
   void check_paths(const std::vector<std::string>& inputs, std::vector<std::string> outputs) const;

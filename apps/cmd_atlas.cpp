@@ -55,6 +55,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     std::vector<std::string> outs = a.outputs;
     for (const std::string* o : {&a.png, &a.imt_out, &a.signal_texture_out}) outs.push_back(*o);
     ctx.check_paths({a.input, signal_texture(a.signal)}, outs);
+    ctx.check_image_outputs({a.png, a.signal_texture_out});
   }
   a.options.seed = ctx.opts.seed;
   a.options.graph_cut = !a.no_graph_cut;

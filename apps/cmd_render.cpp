@@ -49,6 +49,7 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   if (a.charts && !a.texture.empty()) bad_option("--charts and --texture are exclusive");
   ctx.check_paths({a.input, a.texture}, {a.output});
+  ctx.check_image_outputs({a.output});
   if (a.uv_layout && (!a.texture.empty() || a.wireframe || a.ortho || a.transparent))
     bad_option(
         "--uv-layout draws the atlas itself; it takes no --texture, --wireframe, --ortho or --transparent");

@@ -38,6 +38,7 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   const int width = a.width > 0 ? a.width : a.res;
   const int height = a.height > 0 ? a.height : a.res;
   ctx.check_paths({a.input, a.source, signal_texture(a.signal)}, {a.texture_out, a.imt_out});
+  ctx.check_image_outputs({a.texture_out});
   isochart::Mesh mesh = ctx.load(a.input, true).mesh;
   if (!mesh.has_uvs())
     throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");

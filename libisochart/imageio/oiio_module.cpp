@@ -311,7 +311,19 @@ void free_pixels(float* p) {
   std::free(p);
 }
 
-const IsochartsImageModule kModule = {ISOCHARTS_IMAGE_MODULE_ABI, safe_read, free_pixels, safe_write};
+int can_write(const char* path) {
+  try {
+    // create() only picks the plugin for the extension; nothing is opened.
+    const bool ok = OIIO::ImageOutput::create(path) != nullptr;
+    if (!ok) OIIO::geterror();
+    return ok ? 1 : 0;
+  } catch (const std::exception&) {
+    return 0;
+  }
+}
+
+const IsochartsImageModule kModule = {ISOCHARTS_IMAGE_MODULE_ABI, safe_read, free_pixels, safe_write,
+                                      can_write};
 
 }  // namespace
 

@@ -157,6 +157,13 @@ Image read_image(const std::string& path) {
   return image;
 }
 
+void check_image_output(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  if (ext.empty()) throw InputError(path, "output image needs an extension (.png, .jpg, .exr, ...)");
+  if (!image_module().can_write(path.c_str()))
+    throw InputError(path, "unsupported image format '" + ext + "' (use .png, .jpg, .exr, .tif, ...)");
+}
+
 void write_image(const std::string& path, const Image& image) {
   if (image.width <= 0 || image.height <= 0 || image.channels <= 0 ||
       image.pixels.size() != static_cast<std::size_t>(image.width) * image.height * image.channels)

@@ -14,7 +14,7 @@
 extern "C" {
 
 /// Bumped whenever the struct below changes; the loader refuses a module with another.
-#define ISOCHARTS_IMAGE_MODULE_ABI 1
+#define ISOCHARTS_IMAGE_MODULE_ABI 2
 
 /// Results of the module's calls. Messages are one line, without the file name.
 enum IsochartsImageStatus {
@@ -43,6 +43,8 @@ struct IsochartsImageModule {
   int (*write)(const char* path, int width, int height, int channels, int stride, const float* pixels,
                int as_float, int alpha, const char* names, const char* const* attributes, char* message,
                std::size_t message_size);
+  /// 1 when there is a writer for the extension of `path` (nothing is created), else 0.
+  int (*can_write)(const char* path);
 };
 
 /// The module's one exported symbol.

@@ -689,3 +689,25 @@ TEST_CASE("sae --source refuses a source whose vertices are in another order", "
              Catch::Contains("shuffled.obj: vertex 0 is at") &&
                  Catch::Contains("the source must have the atlas's vertices in the same order"));
 }
+
+TEST_CASE("bad image outputs and device outputs are refused before any work", "[cli]") {
+  // They were found by the writers, after the atlas was built (minutes on a large mesh).
+  TempDir tmp("image_outputs");
+  const fs::path err = tmp.path / "err.txt";
+  const std::string obj = (tmp.path / "a.obj").string();
+  const std::string run = "atlas builtin:sphere -o '" + obj + "' ";
+  const struct {
+    std::string args, message;
+  } cases[] = {
+      {"--png '" + (tmp.path / "layout").string() + "'", "layout: output image needs an extension"},
+      {"--png '" + (tmp.path / "layout.xyz").string() + "'", "layout.xyz: unsupported image format '.xyz'"},
+      {"--png /dev/null", "/dev/null: cannot write: not a regular file"},
+      {"--report /dev/null", "/dev/null: cannot write: not a regular file"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.args);
+    CHECK(run_cli(run + c.args, err) == 2);
+    CHECK_THAT(read_bytes(err), Catch::Contains(c.message) && !Catch::Contains("clustering"));
+    CHECK(!fs::exists(obj));
+  }
+}

@@ -72,4 +72,9 @@ Image read_image(const std::string& path);
 ///        Error when writing fails (the temporary file is removed).
 void write_image(const std::string& path, const Image& image);
 
+/// What write_image would refuse for its path before writing anything: no extension, or no
+/// writer for it. Commands check their image outputs with it before any work.
+/// \throw InputError(path, ...) naming the problem.
+void check_image_output(const std::string& path);
+
 }  // namespace isochart
