@@ -109,9 +109,15 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   const auto& s = atlas.stats;
   // Every chart is accepted only within the bounds; the whole can still miss them where the
   // numbers cannot hold a triangle's shape (a sliver 1e-16 of its length high). Say so.
-  const bool bounds_met = s.l2 <= a.options.max_l2 * (1 + 1e-9) && s.linf <= a.options.max_linf * (1 + 1e-9) &&
+  // Signal atlases bound the signal-metric stretch; geometrically they keep --max-geometric-l2.
+  const double l2_bound = a.signal.empty() ? a.options.max_l2 : a.signal_options.max_geometric_l2;
+  const bool bounds_met = s.l2 <= l2_bound * (1 + 1e-9) && s.linf <= a.options.max_linf * (1 + 1e-9) &&
                           s.flipped == 0 && s.overlapping_pairs == 0;
-  if (!bounds_met && a.signal.empty()) {
+  if (a.options.max_charts > 0 && s.charts > a.options.max_charts)
+    ctx.warn(a.input, "the stretch bounds need " + std::to_string(s.charts) +
+                          " charts, more than --max-charts " + std::to_string(a.options.max_charts) +
+                          "; raise --max-l2 or --max-linf for fewer");
+  if (!bounds_met) {
     std::ostringstream w;
     w << "the atlas misses its bounds (L2 " << s.l2 << ", Linf " << s.linf << ", " << s.flipped << " flipped, "
       << s.overlapping_pairs << " overlapping pairs): some triangles are too thin for the coordinates' precision";
@@ -199,7 +205,8 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
 
   std::ostringstream t;
   t << a.input << ": " << s.charts << " charts (" << s.charts_before_merge << " before merging)\n"
-    << "  L2 stretch        " << s.l2 << "  (bound " << a.options.max_l2 << ")\n"
+    << "  L2 stretch        " << s.l2 << "  (bound " << l2_bound << (a.signal.empty() ? "" : ", geometric")
+    << ")\n"
     << "  Linf stretch      " << s.linf << "  (bound " << a.options.max_linf << ")\n"
     << "  packing ratio     " << s.packing_ratio << "\n"
     << "  flipped / overlapping pairs  " << s.flipped << " / " << s.overlapping_pairs << "\n"
@@ -252,9 +259,11 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--chart-lambda", args->signal_options.chart_lambda,
                   "Signal weight of the metric that splits and merges charts (0 = --lambda)")
       ->capture_default_str();
-  sub->add_option("--split-efficiency", args->signal_options.split_efficiency,
-                  "Split large signal charts whose uniform texel density reaches less than this fraction of the "
-                  "ideal signal energy (0 = off)")
+  sub->add_option(
+         "--split-efficiency", args->signal_options.split_efficiency,
+         "Split large signal charts whose uniform texel density reaches less than this fraction of the "
+         "ideal signal energy (0 = off)")
+      ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   sub->add_option("--max-geometric-l2", args->signal_options.max_geometric_l2,
                   "Geometric L2 stretch bound kept by signal charts")

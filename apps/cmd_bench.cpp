@@ -750,7 +750,7 @@ std::vector<double> parse_list(const std::string& s) {
   std::stringstream ss(s);
   std::string x;
   while (std::getline(ss, x, ',')) {
-    if (x.empty()) continue;
+    if (x.empty()) bad_option("--sweep: '" + s + "' has an empty item");
     try {
       std::size_t used = 0;
       const double v = std::stod(x, &used);

@@ -711,3 +711,20 @@ TEST_CASE("bad image outputs and device outputs are refused before any work", "[
     CHECK(!fs::exists(obj));
   }
 }
+
+TEST_CASE("atlas says when the bounds need more charts than --max-charts, and checks option ranges",
+          "[cli]") {
+  TempDir tmp("max_charts");
+  const fs::path err = tmp.path / "err.txt";
+  const std::string out = " -o '" + (tmp.path / "a.obj").string() + "'";
+  CHECK(run_cli("atlas builtin:sphere --max-charts 1" + out, err) == 0);
+  const std::string warned = read_bytes(err);
+  CHECK_THAT(warned, Catch::Contains("builtin:sphere: the stretch bounds need") &&
+                         Catch::Contains("charts, more than --max-charts 1"));
+  CHECK(run_cli("atlas builtin:sphere --max-charts 40" + out, err) == 0);
+  CHECK_THAT(read_bytes(err), !Catch::Contains("--max-charts"));
+  CHECK(run_cli("atlas builtin:sphere --signal normals --split-efficiency 5" + out, err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("--split-efficiency: expected a number from 0 to 1"));
+  CHECK(run_cli("bench builtin:sphere --sweep 1.1,,1.2 --out '" + (tmp.path / "b").string() + "'", err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("has an empty item"));
+}
