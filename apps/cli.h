@@ -2,6 +2,7 @@
 // Conventions shared by every subcommand: global options, progress line, warnings, and
 // how results reach stdout (text or JSON) and the --report file.
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -10,12 +11,11 @@
 #include <initializer_list>
 #include <memory>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
-
+#include "isochart/error.h"
 #include "isochart/io.h"
 #include "isochart/progress.h"
 
@@ -130,6 +130,16 @@ void check_levels(const std::vector<int>& levels);
 /// A layout picture in a texture's proportions (width / height = `aspect`), its longer side
 /// `longer` pixels and its shorter at least 16.
 std::array<int, 2> layout_size(int longer, double aspect);
+
+/// A texture signal is read through the mesh's texture coordinates: faces the file gave none
+/// would all read the texel at (0, 0), a signal made up for them.
+inline void check_signal_uvs(const std::string& signal, const isochart::LoadResult& r,
+                             const std::string& file) {
+  if (signal.rfind("texture:", 0) == 0 && r.report.faces_without_uvs > 0)
+    throw isochart::InputError(file, std::to_string(r.report.faces_without_uvs) +
+                                         " faces have no texture coordinates to read --signal " + signal +
+                                         " through");
+}
 
 /// The image of a `texture:IMG` signal (an input of the run), else "".
 inline std::string signal_texture(const std::string& signal) {

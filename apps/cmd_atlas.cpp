@@ -72,6 +72,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     else if (a.signal_use == "param") a.signal_options.use = isochart::SignalUse::Param;
     else if (a.signal_use == "full") a.signal_options.use = isochart::SignalUse::Full;
     else bad_option("--signal-use must be none, param or full");
+    check_signal_uvs(a.signal, in, a.input);
     signal = isochart::make_signal(in.mesh, a.signal, a.input);
     if (!a.imt_out.empty()) isochart::write_imt(a.imt_out, isochart::face_imt(in.mesh, signal));
   } else if (!a.imt_out.empty() || !a.signal_texture_out.empty()) {

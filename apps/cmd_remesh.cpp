@@ -62,10 +62,10 @@ std::string image_path(const std::string& prefix, int w, int h, const char* ext)
   return prefix + "_" + std::to_string(w) + "x" + std::to_string(h) + ext;
 }
 
-isochart::Mesh load_any(const Context& ctx, const std::string& path, bool atlas = false) {
+isochart::LoadResult load_any(const Context& ctx, const std::string& path, bool atlas = false) {
   const std::string prefix = "builtin:";
-  if (path.rfind(prefix, 0) == 0) return isochart::make_builtin(path.substr(prefix.size()));
-  return ctx.load(path, atlas).mesh;
+  if (path.rfind(prefix, 0) == 0) return {isochart::make_builtin(path.substr(prefix.size())), {}};
+  return ctx.load(path, atlas);
 }
 
 // An external atlas must lay out the input's surface (its own vertices and faces may be split
@@ -117,13 +117,14 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
                      {isochart::MeshFormat::Ply, isochart::MeshFormat::Obj, isochart::MeshFormat::Glb},
                      ".ply, .obj or .glb");
 
-  const isochart::Mesh input = load_any(ctx, a.input);
+  const isochart::LoadResult loaded = load_any(ctx, a.input);
+  const isochart::Mesh& input = loaded.mesh;
   // The atlas: an external one, or the iso-chart atlas of the input.
   nlohmann::json atlas_json;
   isochart::Mesh atlas;
   const auto ta = std::chrono::steady_clock::now();
   if (!a.atlas.empty()) {
-    atlas = load_any(ctx, a.atlas, true);
+    atlas = load_any(ctx, a.atlas, true).mesh;
     if (!atlas.has_uvs())
       throw isochart::InputError(a.atlas, "the atlas has no texture coordinates (vt)");
     check_atlas_matches(input, atlas, a.atlas);
@@ -158,6 +159,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
       // the surface bends, where linear reconstruction errs most.
       isochart::SignalAtlasOptions so;
       so.use = a.signal_use == "full" ? isochart::SignalUse::Full : isochart::SignalUse::Param;
+      check_signal_uvs(a.signal, loaded, a.input);
       const isochart::Signal signal = isochart::make_signal(input, a.signal, a.input);
       isochart::SignalAtlasStats ss;
       built = isochart::build_signal_atlas(input, signal, ao, so, &ss, ctx.progress());

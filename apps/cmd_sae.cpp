@@ -39,7 +39,8 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   const int height = a.height > 0 ? a.height : a.res;
   ctx.check_paths({a.input, a.source, signal_texture(a.signal)}, {a.texture_out, a.imt_out});
   ctx.check_image_outputs({a.texture_out});
-  isochart::Mesh mesh = ctx.load(a.input, true).mesh;
+  const isochart::LoadResult loaded = ctx.load(a.input, true);
+  const isochart::Mesh& mesh = loaded.mesh;
   if (!mesh.has_uvs())
     throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
   // The signal lives on the source mesh (same vertices and faces) when one is given: e.g. its
@@ -47,7 +48,9 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   isochart::Signal signal;
   if (!a.source.empty()) {
     // Joined like the atlas, so that a source split at the same seams numbers alike.
-    const isochart::Mesh src = ctx.load(a.source, true).mesh;
+    const isochart::LoadResult src_loaded = ctx.load(a.source, true);
+    check_signal_uvs(a.signal, src_loaded, a.source);
+    const isochart::Mesh& src = src_loaded.mesh;
     if (src.num_vertices() != mesh.num_vertices() || src.num_faces() != mesh.num_faces())
       throw isochart::InputError(a.source, "has " + std::to_string(src.num_vertices()) + " vertices and " +
                                                std::to_string(src.num_faces()) + " faces, the atlas " +
@@ -72,6 +75,7 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
                                                  "have the atlas's faces in the same order");
     signal = isochart::make_signal(src, a.signal, a.source);
   } else {
+    check_signal_uvs(a.signal, loaded, a.input);
     signal = isochart::make_signal(mesh, a.signal, a.input);
   }
   isochart::Image baked;

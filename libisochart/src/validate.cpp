@@ -322,6 +322,7 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
   auto need_repair = [&](const std::string& message) { throw InputError(src, message + "; use repair"); };
   report = ValidationReport{};
   report.warnings = raw.warnings;
+  report.faces_without_uvs = raw.faces_without_uvs;
 
   // ---- Errors nothing can repair ----
   if (raw.positions.size() > static_cast<std::size_t>(INT_MAX) / 2 ||

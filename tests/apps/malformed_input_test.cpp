@@ -728,3 +728,25 @@ TEST_CASE("atlas says when the bounds need more charts than --max-charts, and ch
   CHECK(run_cli("bench builtin:sphere --sweep 1.1,,1.2 --out '" + (tmp.path / "b").string() + "'", err) == 2);
   CHECK_THAT(read_bytes(err), Catch::Contains("has an empty item"));
 }
+
+TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
+  // Faces without vt read the texel at (0, 0): half the surface got a made-up signal.
+  TempDir tmp("signal_uvs");
+  const fs::path err = tmp.path / "err.txt", mesh = tmp.path / "half.obj", png = tmp.path / "t.png";
+  REQUIRE(run_cli("-q render builtin:creature -o '" + png.string() + "' --views 1 --width 64 --height 64",
+                  err) == 0);
+  write_bytes(mesh,
+              "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0 0\nvt 1 0\nvt 0 1\n"
+              "f 1/1 3/3 2/2\nf 1/1 2/2 4/3\nf 1 4 3\nf 2 3 4\n");
+  const std::string signal = " --signal 'texture:" + png.string() + "'";
+  CHECK(run_cli("atlas '" + mesh.string() + "' -o '" + (tmp.path / "a.obj").string() + "'" + signal, err) ==
+        2);
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("half.obj: 2 faces have no texture coordinates to read --signal texture:"));
+  CHECK(run_cli("sae '" + mesh.string() + "'" + signal, err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("2 faces have no texture coordinates"));
+  // Normals need none.
+  CHECK(
+      run_cli("-q atlas '" + mesh.string() + "' -o '" + (tmp.path / "b.obj").string() + "' --signal normals",
+              err) == 0);
+}

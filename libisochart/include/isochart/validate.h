@@ -19,6 +19,7 @@ struct RawMesh {
   std::vector<std::vector<int>> polygon_uvs;  ///< per polygon, same size as polygons[i], or empty
   std::vector<int> polygon_groups;            ///< per polygon group id, or empty
   std::vector<std::string> warnings;          ///< reader notes (ignored elements, dropped attributes)
+  long long faces_without_uvs = 0;            ///< faces an OBJ gave no vt, given (0, 0) by the reader
 };
 
 /// The raw form of an existing mesh, so that meshes made in code (built-ins, tests) go
@@ -38,6 +39,7 @@ struct ValidationReport {
   int reoriented_faces = 0;           ///< faces flipped to make orientation consistent
   int cut_edges = 0;                  ///< edges cut open because no consistent orientation exists
   int components = 0;                 ///< edge-connected components after repair
+  long long faces_without_uvs = 0;    ///< faces the file gave no texture coordinates (they read (0, 0))
   std::vector<std::string> warnings;  ///< one line per repair, for the CLI to print
 };
 
