@@ -9,6 +9,7 @@
 #include "isochart/image.h"
 #include "isochart/mesh.h"
 #include "isochart/signal.h"
+#include "isochart/stretch.h"
 
 namespace cli {
 
@@ -43,6 +44,24 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   const isochart::Mesh& mesh = loaded.mesh;
   if (!mesh.has_uvs())
     throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
+  {
+    // The SAE bakes the signal into one texture through the UVs: where they leave it, overlap
+    // or collapse, texels are shared or clamped and the figure says little about the atlas.
+    const isochart::AtlasQuality q = isochart::measure_atlas(mesh);
+    const double tol = 1e-9;
+    if (q.uv_min.x < -tol || q.uv_min.y < -tol || q.uv_max.x > 1 + tol || q.uv_max.y > 1 + tol) {
+      std::ostringstream w;
+      w << "texture coordinates reach outside [0, 1] (" << q.uv_min.x << ".." << q.uv_max.x << " by "
+        << q.uv_min.y << ".." << q.uv_max.y << "); they are clamped to the texture's edge";
+      ctx.warn(a.input, w.str());
+    }
+    if (q.overlapping_pairs > 0)
+      ctx.warn(a.input, std::to_string(q.overlapping_pairs) +
+                            " pairs of triangles overlap in UV; they share texels, which raises the SAE");
+    if (q.stretch.degenerate > 0)
+      ctx.warn(a.input,
+               std::to_string(q.stretch.degenerate) + " triangles have zero area in UV; they get no texels");
+  }
   // The signal lives on the source mesh (same vertices and faces) when one is given: e.g. its
   // vertex colours, or a texture through its original texture coordinates.
   isochart::Signal signal;

@@ -254,11 +254,15 @@ double signal_stretch(const Mesh& mesh, const std::vector<Imt>& imt) {
   double energy = 0, base = 0, area3 = 0, area_uv = 0;
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const Face& t = mesh.face_uvs[f];
-    const Vec2d p0 = mesh.uvs[t[0]], p1 = mesh.uvs[t[1]], p2 = mesh.uvs[t[2]];
+    Vec2d p0 = mesh.uvs[t[0]], p1 = mesh.uvs[t[1]], p2 = mesh.uvs[t[2]];
     const Flat q = flatten_face(mesh, f);
     area3 += q.area;
     area_uv += std::abs(signed_area(p0, p1, p2));
     if (!(q.area > 0)) continue;
+    // How many texels the signal gets does not depend on which way a triangle faces: another
+    // tool's mirrored charts (UVAtlas writes v downwards) measured infinite. Flips are
+    // counted by measure_atlas; a collapsed triangle still has no texels at all.
+    if (signed_area(p0, p1, p2) < 0) p0.x = -p0.x, p1.x = -p1.x, p2.x = -p2.x;
     Vec2d ss, st;
     if (!jacobian(q, p0, p1, p2, ss, st)) return kInf;
     // The IMT is already integrated over the face's surface area.

@@ -750,3 +750,25 @@ TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
       run_cli("-q atlas '" + mesh.string() + "' -o '" + (tmp.path / "b.obj").string() + "' --signal normals",
               err) == 0);
 }
+
+TEST_CASE("sae warns when the UVs leave the texture, overlap or collapse", "[cli]") {
+  TempDir tmp("sae_warnings");
+  const fs::path atlas = tmp.path / "a.obj", outside = tmp.path / "outside.obj", err = tmp.path / "err.txt";
+  REQUIRE(run_cli("-q atlas builtin:sphere -o '" + atlas.string() + "'", err) == 0);
+  std::istringstream in(read_bytes(atlas));
+  std::string text, line;
+  while (std::getline(in, line)) {
+    if (line.rfind("vt ", 0) == 0) {
+      std::istringstream uv(line.substr(3));
+      double u = 0, v = 0;
+      uv >> u >> v;
+      line = "vt " + std::to_string(2 * u) + " " + std::to_string(v);
+    }
+    text += line + "\n";
+  }
+  write_bytes(outside, text);
+  CHECK(run_cli("sae '" + atlas.string() + "' --res 64", err) == 0);
+  CHECK_THAT(read_bytes(err), !Catch::Contains("warning"));
+  CHECK(run_cli("sae '" + outside.string() + "' --res 64", err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains("outside.obj: texture coordinates reach outside [0, 1]"));
+}

@@ -234,10 +234,14 @@ TEST_CASE("signal stretch is 1 for an isometry and lower when texels follow the 
   Mesh bad = m;
   for (auto& uv : bad.uvs) uv.x = uv.x <= 0.5 ? uv.x * 1.5 : 0.75 + (uv.x - 0.5) * 0.5;
   CHECK(signal_stretch(bad, imt) > 1.05);
-  // A flipped triangle makes it infinite.
-  Mesh flipped = m;
-  std::swap(flipped.face_uvs[0][1], flipped.face_uvs[0][2]);
-  CHECK(std::isinf(signal_stretch(flipped, imt)));
+  // A mirrored layout gets the same texels (UVAtlas writes v downwards; it measured infinite).
+  Mesh mirrored = warped;
+  for (auto& uv : mirrored.uvs) uv.y = 1 - uv.y;
+  CHECK(signal_stretch(mirrored, imt) == Approx(signal_stretch(warped, imt)).epsilon(1e-12));
+  // A triangle collapsed in UV gets none: infinite.
+  Mesh collapsed = m;
+  collapsed.face_uvs[0][2] = collapsed.face_uvs[0][1];
+  CHECK(std::isinf(signal_stretch(collapsed, imt)));
 }
 
 TEST_CASE("metric L2 stretch equals geometric L2 stretch for the identity metric", "[signal]") {

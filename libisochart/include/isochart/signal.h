@@ -67,7 +67,8 @@ double metric_l2_stretch(const std::vector<Vec3d>& positions, const std::vector<
 /// Signal stretch of an atlas (Sander et al. 2002; Iso-charts §7): with texture coordinates
 /// scaled so the total UV area equals the surface area, sqrt(Σ tr(Jᵀ IMT J)/2 / Σ tr(IMT)/2).
 /// An isometric map gives 1; spending more texture on high-signal faces gives less.
-/// `mesh` needs per-corner UVs; `imt` is #F. +inf when a UV triangle is flipped.
+/// `mesh` needs per-corner UVs; `imt` is #F. A triangle facing the other way in UV (a
+/// mirrored chart) is measured like its mirror image; +inf when one has zero UV area.
 double signal_stretch(const Mesh& mesh, const std::vector<Imt>& imt);
 
 /// The signal sampled into a W×H texture through the atlas `mesh` (per-corner UVs in [0,1]²,
