@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -58,7 +59,13 @@ std::string level_path(const std::string& path, int w, int h, bool suffix) {
   return path.substr(0, dot) + tag + path.substr(dot);
 }
 
-std::string image_path(const std::string& prefix, int w, int h, const char* ext) {
+std::string image_path(std::string prefix, int w, int h, const char* ext) {
+  // `--png prev.png` means the prefix prev, not prev.png_64x64.png.
+  const std::size_t n = std::char_traits<char>::length(ext);
+  if (prefix.size() > n && std::equal(ext, ext + n, prefix.end() - n, [](char a, char b) {
+        return a == std::tolower(static_cast<unsigned char>(b));
+      }))
+    prefix.resize(prefix.size() - n);
   return prefix + "_" + std::to_string(w) + "x" + std::to_string(h) + ext;
 }
 
@@ -351,7 +358,9 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
                                           "building the iso-chart atlas of the input");
   sub->add_option("--exr", args->exr, "Write each level as PREFIX_WxH.exr (float positions, normals, "
                                       "defined mask, chart and group ids, block diagonals)");
-  sub->add_option("--png", args->png, "Write a normal-map preview of each level as PREFIX_WxH.png");
+  sub->add_option(
+      "--png", args->png,
+      "Write a normal-map preview of each level as PREFIX_WxH.png (a .png ending PREFIX is dropped)");
   sub->add_flag("--no-optimize", args->no_optimize, "Keep the zippered sample positions (no fitting)");
   sub->add_flag("--shorter-diagonals", args->shorter_diagonals,
                 "Split every 2x2 block along its shorter diagonal (default: the one closer to the input "

@@ -201,8 +201,14 @@ MeshFormat format_from_path(const std::string& path) {
   if (path.empty()) throw InputError("", "an empty file name was given for a mesh");
   const auto slash = path.find_last_of('/');
   const auto dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash))
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) {
+    // Say what the name is when it is something else than a file without an extension.
+    struct stat st {};
+    if (path == "-") throw InputError(path, "standard input and output are not supported; give a file name");
+    if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+      throw InputError(path, "is a directory, not a mesh file");
     throw InputError(path, "has no file extension (expected .obj, .off, .ply, .gltf or .glb)");
+  }
   std::string ext = path.substr(dot + 1);
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });

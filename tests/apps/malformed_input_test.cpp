@@ -772,3 +772,19 @@ TEST_CASE("sae warns when the UVs leave the texture, overlap or collapse", "[cli
   CHECK(run_cli("sae '" + outside.string() + "' --res 64", err) == 0);
   CHECK_THAT(read_bytes(err), Catch::Contains("outside.obj: texture coordinates reach outside [0, 1]"));
 }
+
+TEST_CASE("directories, '-' and image prefixes with an extension are named for what they are", "[cli]") {
+  TempDir tmp("names");
+  const fs::path err = tmp.path / "err.txt";
+  CHECK(run_cli("info '" + tmp.path.string() + "'", err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("is a directory, not a mesh file"));
+  CHECK(run_cli("info -", err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("-: standard input and output are not supported"));
+  CHECK(run_cli("atlas builtin:sphere -o -", err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("-: standard output is not supported"));
+  // --png prev.png is the prefix prev: prev_32x32.png, not prev.png_32x32.png.
+  CHECK(run_cli("-q remesh builtin:sphere --res 32 --no-psnr -o '" + (tmp.path / "r.ply").string() +
+                    "' --png '" + (tmp.path / "prev.png").string() + "'",
+                err) == 0);
+  CHECK(fs::exists(tmp.path / "prev_32x32.png"));
+}
