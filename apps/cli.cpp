@@ -176,7 +176,9 @@ isochart::MeshFormat output_mesh_format(const std::string& path,
                                         const std::string& writes) {
   const std::string ext = std::filesystem::path(path).extension().string();  // ".obj" alone has none
   if (path == "-") throw isochart::InputError(path, "standard output is not supported; give a file name");
-  if (std::filesystem::is_directory(path)) throw isochart::InputError(path, "cannot write: is a directory");
+  std::error_code ec;  // a name too long to look up is refused by check_paths, with a message
+  if (std::filesystem::is_directory(path, ec))
+    throw isochart::InputError(path, "cannot write: is a directory");
   if (ext.empty()) throw isochart::InputError(path, "has no file extension (this command writes " + writes + ")");
   try {
     const isochart::MeshFormat f = isochart::format_from_path(path);

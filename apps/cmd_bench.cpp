@@ -25,6 +25,12 @@ namespace cli {
 namespace {
 
 namespace fs = std::filesystem;
+
+// Without an error code these throw on a name too long to look up (an "internal error").
+bool file_exists(const std::string& path) {
+  std::error_code ec;
+  return fs::exists(path, ec);
+}
 using Clock = std::chrono::steady_clock;
 
 enum class Kind { Isochart, IsomapNocut, Lscm, LscmStretch, ExternalAuto, ExternalFile };
@@ -92,7 +98,7 @@ std::vector<Method> parse_methods_impl(const std::string& list) {
     else if (m.rfind("external:", 0) == 0 && m.size() > 9) {
       x.kind = Kind::ExternalFile;
       x.file = m.substr(9);
-      if (!fs::exists(x.file)) throw isochart::InputError(x.file, "no such file (method " + m + ")");
+      if (!file_exists(x.file)) throw isochart::InputError(x.file, "no such file (method " + m + ")");
     } else {
       throw isochart::InputError("", "unknown method '" + m +
                                          "' (expected isochart, isomap-nocut, lscm, lscm+stretch, external "
@@ -150,7 +156,7 @@ std::vector<std::pair<std::string, std::string>> auto_externals(const std::strin
 isochart::Mesh load_any(const Context& ctx, const std::string& path, bool atlas = false) {
   const std::string prefix = "builtin:";
   if (path.rfind(prefix, 0) == 0) return isochart::make_builtin(path.substr(prefix.size()));
-  if (!fs::exists(path)) throw isochart::InputError(path, "no such file");
+  if (!file_exists(path)) throw isochart::InputError(path, "no such file");
   return ctx.load(path, atlas).mesh;
 }
 
@@ -774,11 +780,11 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   const std::vector<Method> methods = parse_methods_impl(a.methods);
   if (a.meshes.empty()) a.meshes = default_meshes(a.data);
   for (const auto& m : a.meshes)
-    if (m.rfind("builtin:", 0) != 0 && !fs::exists(m)) throw isochart::InputError(m, "no such file");
+    if (m.rfind("builtin:", 0) != 0 && !file_exists(m)) throw isochart::InputError(m, "no such file");
   {
     std::error_code ec;
     fs::create_directories(a.out, ec);
-    if (!fs::is_directory(a.out)) throw isochart::InputError(a.out, "cannot create the output directory");
+    if (!fs::is_directory(a.out, ec)) throw isochart::InputError(a.out, "cannot create the output directory");
   }
 
   Bench bench(ctx, a, methods);
