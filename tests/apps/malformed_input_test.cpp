@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -147,6 +148,18 @@ std::vector<Case> malformed_corpus() {
   for (int i = 0; i < 500'000; ++i) many += " 1";
   c.push_back({"long_vertex.obj", many + "\n", "too many numbers after 'v'"});
   return c;
+}
+
+// The built-in sphere's atlas written to `atlas`, and its text with every line passed through
+// `edit` (which may change the line, or return false to drop it).
+std::string edited_sphere_atlas(const fs::path& atlas, const fs::path& err,
+                                const std::function<bool(std::string&)>& edit) {
+  REQUIRE(run_cli("-q atlas builtin:sphere -o '" + atlas.string() + "'", err) == 0);
+  std::istringstream in(read_bytes(atlas));
+  std::string text, line;
+  while (std::getline(in, line))
+    if (edit(line)) text += line + "\n";
+  return text;
 }
 
 }  // namespace
@@ -635,18 +648,12 @@ TEST_CASE("remesh --atlas warns when the atlas's surface is not the input's topo
   // PSNR (measured against the atlas) does not show.
   TempDir tmp("atlas_topology");
   const fs::path atlas = tmp.path / "a.obj", holed = tmp.path / "holed.obj", err = tmp.path / "err.txt";
-  REQUIRE(run_cli("-q atlas builtin:sphere -o '" + atlas.string() + "'", err) == 0);
-  std::istringstream in(read_bytes(atlas));
-  std::string text, line;
   bool dropped = false;
-  while (std::getline(in, line)) {
-    if (!dropped && line.rfind("f ", 0) == 0) {
-      dropped = true;
-      continue;
-    }
-    text += line + "\n";
-  }
-  write_bytes(holed, text);
+  write_bytes(holed, edited_sphere_atlas(atlas, err, [&](std::string& line) {
+                if (dropped || line.rfind("f ", 0) != 0) return true;
+                dropped = true;
+                return false;
+              }));
   const std::string run =
       "remesh builtin:sphere --res 32 --no-psnr -o '" + (tmp.path / "r.ply").string() + "' --atlas ";
   CHECK(run_cli(run + "'" + atlas.string() + "'", err) == 0);
@@ -662,15 +669,13 @@ TEST_CASE("sae --source refuses a source whose vertices are in another order", "
   // source gave a wrong SAE without a word.
   TempDir tmp("sae_source");
   const fs::path atlas = tmp.path / "a.obj", shuffled = tmp.path / "shuffled.obj", err = tmp.path / "err.txt";
-  REQUIRE(run_cli("-q atlas builtin:sphere -o '" + atlas.string() + "'", err) == 0);
   // The same mesh with its vertex list reversed and the faces renumbered to match.
-  std::istringstream in(read_bytes(atlas));
   std::vector<std::string> vertices, faces;
-  std::string line;
-  while (std::getline(in, line)) {
+  edited_sphere_atlas(atlas, err, [&](std::string& line) {
     if (line.rfind("v ", 0) == 0) vertices.push_back(line);
     if (line.rfind("f ", 0) == 0) faces.push_back(line);
-  }
+    return true;
+  });
   const int n = static_cast<int>(vertices.size());
   std::string text;
   for (int i = n - 1; i >= 0; --i) text += vertices[i] + "\n";
@@ -754,19 +759,15 @@ TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
 TEST_CASE("sae warns when the UVs leave the texture, overlap or collapse", "[cli]") {
   TempDir tmp("sae_warnings");
   const fs::path atlas = tmp.path / "a.obj", outside = tmp.path / "outside.obj", err = tmp.path / "err.txt";
-  REQUIRE(run_cli("-q atlas builtin:sphere -o '" + atlas.string() + "'", err) == 0);
-  std::istringstream in(read_bytes(atlas));
-  std::string text, line;
-  while (std::getline(in, line)) {
-    if (line.rfind("vt ", 0) == 0) {
-      std::istringstream uv(line.substr(3));
-      double u = 0, v = 0;
-      uv >> u >> v;
-      line = "vt " + std::to_string(2 * u) + " " + std::to_string(v);
-    }
-    text += line + "\n";
-  }
-  write_bytes(outside, text);
+  write_bytes(outside, edited_sphere_atlas(atlas, err, [](std::string& line) {
+                if (line.rfind("vt ", 0) == 0) {
+                  std::istringstream uv(line.substr(3));
+                  double u = 0, v = 0;
+                  uv >> u >> v;
+                  line = "vt " + std::to_string(2 * u) + " " + std::to_string(v);
+                }
+                return true;
+              }));
   CHECK(run_cli("sae '" + atlas.string() + "' --res 64", err) == 0);
   CHECK_THAT(read_bytes(err), !Catch::Contains("warning"));
   CHECK(run_cli("sae '" + outside.string() + "' --res 64", err) == 0);
