@@ -138,14 +138,15 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     {
       // The remesh is of the atlas's surface; one with a face missing or a seam left open
       // (a hole in a closed input) passes the size check above, so say so.
-      const isochart::Topology ti(input), ta(atlas);
-      if (ti.euler_characteristic() != ta.euler_characteristic() ||
-          ti.boundary_loops().size() != ta.boundary_loops().size())
-        ctx.warn(a.atlas, "the atlas's surface has euler characteristic " +
-                              std::to_string(ta.euler_characteristic()) + " and " +
-                              std::to_string(ta.boundary_loops().size()) + " boundary loops, the input's " +
-                              std::to_string(ti.euler_characteristic()) + " and " +
-                              std::to_string(ti.boundary_loops().size()) + "; the remesh follows the atlas");
+      const isochart::Topology topo_in(input), topo_atlas(atlas);
+      if (topo_in.euler_characteristic() != topo_atlas.euler_characteristic() ||
+          topo_in.boundary_loops().size() != topo_atlas.boundary_loops().size())
+        ctx.warn(a.atlas,
+                 "the atlas's surface has euler characteristic " +
+                     std::to_string(topo_atlas.euler_characteristic()) + " and " +
+                     std::to_string(topo_atlas.boundary_loops().size()) + " boundary loops, the input's " +
+                     std::to_string(topo_in.euler_characteristic()) + " and " +
+                     std::to_string(topo_in.boundary_loops().size()) + "; the remesh follows the atlas");
     }
     atlas_json["source"] = a.atlas;
     // Folded or overlapping charts sample one place of the surface for two: the remesh folds
