@@ -174,6 +174,9 @@ struct Shared {
   std::vector<Vec3d> face_color;  // Shaded / Charts
   Wrap texture_wrap = Wrap::Repeat;
   int texture_alpha = -1;  // the texture's alpha channel, if it has one
+  // With alpha, the texture with its colours multiplied by alpha: filtered straight, the colour
+  // of transparent texels bled in as a fringe along alpha edges.
+  Image premultiplied;
   Vec3d centre;
   double radius;
   std::vector<char> referenced;
@@ -258,7 +261,9 @@ void render_view(const Shared& s, int view, int x0, int tile_w, Image& out) {
   const Vec3d fill_light = normalized(cam.right * 0.6 + cam.up * 0.1 - cam.forward * 0.5);
   const double wire_half_width = 0.5 * ss;  // one output pixel in total, half from each side
   float texel[64];
-  const Image* tex = o.color == ColorMode::Textured ? o.texture : nullptr;
+  const Image* tex = o.color != ColorMode::Textured ? nullptr
+                     : s.texture_alpha >= 0         ? &s.premultiplied
+                                                    : o.texture;
   auto shade = [&](int x, int y, int f) {
     const Face& t = mesh.faces[f];
     const ScreenVertex &a = sv[t[0]], &b = sv[t[1]], &c = sv[t[2]];
@@ -291,7 +296,7 @@ void render_view(const Shared& s, int view, int x0, int tile_w, Image& out) {
       // a viewer's blend, instead of showing the colour of its transparent texels.
       if (s.texture_alpha >= 0) {
         const double alpha = std::clamp<double>(texel[s.texture_alpha], 0.0, 1.0);
-        base = base * alpha + kGrey * (1 - alpha);
+        base = base + kGrey * (1 - alpha);  // already multiplied by alpha
       }
     } else {
       base = s.face_color[f];
@@ -501,6 +506,15 @@ Image render_mesh(const Mesh& input, const RenderOptions& options) {
         s.texture_wrap = unit ? Wrap::Clamp : Wrap::Repeat;
       }
       s.texture_alpha = o.texture->alpha_channel();
+      if (s.texture_alpha >= 0) {
+        s.premultiplied = *o.texture;
+        Image& pm = s.premultiplied;
+        for (std::size_t i = 0; i < pm.pixels.size(); i += pm.channels) {
+          const float alpha = std::clamp(pm.pixels[i + s.texture_alpha], 0.0f, 1.0f);
+          for (int c = 0; c < pm.channels; ++c)
+            if (c != s.texture_alpha) pm.pixels[i + c] *= alpha;
+        }
+      }
       break;
   }
 

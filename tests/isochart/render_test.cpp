@@ -240,6 +240,29 @@ TEST_CASE("a transparent texture shows the plain surface beneath it", "[render]"
   CHECK(render_mesh(quad, o).pixels == plain.pixels);
 }
 
+TEST_CASE("a texture's transparent colour does not bleed along its alpha edge", "[render]") {
+  // Left half opaque blue, right half transparent red: filtered straight, the red bled into a
+  // purple fringe at the edge; premultiplied, the edge blends blue into the grey surface.
+  const Mesh quad = textured_quad();
+  Image tex(8, 8, 4, 0.0f);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) {
+      tex.at(x, y, 0) = x < 4 ? 0.0f : 1.0f;
+      tex.at(x, y, 2) = x < 4 ? 1.0f : 0.0f;
+      tex.at(x, y, 3) = x < 4 ? 1.0f : 0.0f;
+    }
+  RenderOptions o;
+  o.width = o.height = 96;
+  o.color = ColorMode::Textured;
+  o.texture = &tex;
+  const Image img = render_mesh(quad, o);
+  int fringe = 0;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x)
+      if (!is_white(img, x, y) && img.at(x, y, 0) > img.at(x, y, 1) + 0.05f) ++fringe;  // more red than green
+  CHECK(fringe == 0);
+}
+
 TEST_CASE("textured interpolation is perspective-correct", "[render]") {
   // A long strip on the ground (y = 0) receding from the front camera, which looks 15° down:
   // the near end (z = 4) is at the bottom of the image, the far end (z = -4) at the top.
