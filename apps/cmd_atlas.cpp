@@ -142,7 +142,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
         lo[c] = {std::min(lo[c].x, p[k].x), std::min(lo[c].y, p[k].y)};
         hi[c] = {std::max(hi[c].x, p[k].x), std::max(hi[c].y, p[k].y)};
       }
-      area[c] += 0.5 * std::abs((p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[1].y - p[0].y) * (p[2].x - p[0].x));
+      area[c] += std::abs(isochart::signed_area(p[0], p[1], p[2]));
     }
     const int big = static_cast<int>(std::max_element(area.begin(), area.end()) - area.begin());
     const double dx = hi[big].x - lo[big].x, dy = hi[big].y - lo[big].y;

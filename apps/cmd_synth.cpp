@@ -110,23 +110,13 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   const isochart::Mesh input = a.input.rfind(prefix, 0) == 0 ? isochart::make_builtin(a.input.substr(prefix.size()))
                                                              : ctx.load(a.input).mesh;
   if (!direction.empty()) {
-    // Where the direction is within about 17° of the normal the field falls back to another
-    // axis (synth::direction_field), so on a flat mesh seen face-on it is ignored outright.
-    const isochart::Vec3d d = isochart::normalized(isochart::Vec3d{direction[0], direction[1], direction[2]});
-    double total = 0, along_normal = 0;
-    for (const auto& f : input.faces) {
-      const isochart::Vec3d n = isochart::cross(input.positions[f[1]] - input.positions[f[0]],
-                                                input.positions[f[2]] - input.positions[f[0]]);
-      const double area2 = isochart::norm(n);
-      if (!(area2 > 0)) continue;
-      total += area2;
-      if (std::fabs(isochart::dot(n, d)) > 0.954 * area2) along_normal += area2;
-    }
-    if (total > 0 && along_normal >= 0.25 * total) {
+    // There the field follows another axis, so on a flat mesh seen face-on it is ignored outright.
+    const double share =
+        synth::direction_along_normal_share(input, {direction[0], direction[1], direction[2]});
+    if (share >= 0.25) {
       std::ostringstream w;
       w << "--direction " << a.direction[0] << "," << a.direction[1] << "," << a.direction[2]
-        << " is within 17 degrees of the surface normal on " << std::setprecision(3)
-        << 100 * along_normal / total
+        << " is within 17 degrees of the surface normal on " << std::setprecision(3) << 100 * share
         << " % of the surface, where the pattern follows another axis; give a direction along the surface";
       ctx.warn(a.input, w.str());
     }

@@ -422,12 +422,11 @@ void remove_temporary_files_on_interrupt() {
   }
 }
 
-std::string temporary_path(const std::string& target, const std::string& extension) {
+std::string temporary_path(const std::string& target, const std::string& ext) {
   // pid + counter makes the name unique across processes and threads writing beside each
   // other; the same directory makes the final rename atomic.
   static std::atomic<unsigned> counter{0};
   const fs::path t(target);
-  const std::string& ext = extension;
   std::string base = ext.empty() ? t.filename().string() : "." + t.stem().string();
   const std::string tag = ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
   // A file name has at most 255 bytes: an output named with 240 of them was refused ("File name

@@ -138,6 +138,28 @@ std::vector<Vec3d> smoothest_field(const isochart::Mesh& mesh, const isochart::T
 
 }  // namespace
 
+namespace {
+// A projected direction shorter than this (the direction within about 17° of the normal) is
+// blended with a perpendicular axis in direction_field.
+constexpr double kMinProjected = 0.3;
+}  // namespace
+
+double direction_along_normal_share(const isochart::Mesh& mesh, const Vec3d& direction) {
+  if (!(isochart::norm(direction) > 0)) return 0;
+  const Vec3d d = isochart::normalized(direction);
+  const double cos_limit = std::sqrt(1 - kMinProjected * kMinProjected);
+  double total = 0, along = 0;
+  for (const auto& f : mesh.faces) {
+    const Vec3d n = isochart::cross(mesh.positions[f[1]] - mesh.positions[f[0]],
+                                    mesh.positions[f[2]] - mesh.positions[f[0]]);
+    const double area2 = isochart::norm(n);
+    if (!(area2 > 0)) continue;
+    total += area2;
+    if (std::fabs(isochart::dot(n, d)) > cos_limit * area2) along += area2;
+  }
+  return total > 0 ? along / total : 0;
+}
+
 std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& direction, int iterations,
                                    int symmetry) {
   if (symmetry < 1) throw isochart::InputError("", "direction-field symmetry must be at least 1");
@@ -154,9 +176,9 @@ std::vector<Vec3d> direction_field(const isochart::Mesh& mesh, const Vec3d& dire
   };
   for (int i = 0; i < nv; ++i) {
     Vec3d p = project(primary, i);
-    if (isochart::norm(p) < 0.3) {
+    if (isochart::norm(p) < kMinProjected) {
       const Vec3d q = project(secondary, i);
-      p = isochart::norm(p) < 1e-6 ? q : p + q * (0.3 - isochart::norm(p));
+      p = isochart::norm(p) < 1e-6 ? q : p + q * (kMinProjected - isochart::norm(p));
     }
     d[i] = isochart::norm(p) > 1e-12 ? isochart::normalized(p) : Vec3d{0, 0, 0};
   }

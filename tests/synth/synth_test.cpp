@@ -722,3 +722,14 @@ TEST_CASE("taps cross seams whatever the mesh's units", "[synth]") {
   CHECK(tiny.seam_pairs == one.seam_pairs);
   CHECK(tiny.seam_error == Approx(one.seam_error).epsilon(0.05));
 }
+
+TEST_CASE("the share of the surface where a user direction lies along the normal", "[synth]") {
+  isochart::Mesh square;
+  square.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  square.faces = {{0, 1, 2}, {0, 2, 3}};
+  CHECK(synth::direction_along_normal_share(square, {0, 0, 2}) == 1);
+  CHECK(synth::direction_along_normal_share(square, {0, 0.2, 1}) == 1);  // 11° off the normal
+  CHECK(synth::direction_along_normal_share(square, {0, 0.5, 1}) == 0);  // 27° off
+  CHECK(synth::direction_along_normal_share(square, {1, 0, 0}) == 0);
+  CHECK(synth::direction_along_normal_share(square, {0, 0, 0}) == 0);
+}

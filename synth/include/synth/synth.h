@@ -197,6 +197,11 @@ std::vector<isochart::Vec3d> direction_field(const isochart::Mesh& mesh,
                                              const isochart::Vec3d& direction, int iterations,
                                              int symmetry = 1);
 
+/// The share of `mesh`'s surface area where direction_field does not follow `direction`
+/// because it lies too near the normal (within about 17°) and another axis takes over: 1 on a
+/// flat mesh given its normal. 0 for a zero direction or a mesh without area.
+double direction_along_normal_share(const isochart::Mesh& mesh, const isochart::Vec3d& direction);
+
 /// A neighbourhood tap: a weighted mix of up to four samples of one level (weights sum to 1),
 /// or missing (all weights 0) when it falls off the mesh boundary.
 struct Tap {
