@@ -136,12 +136,10 @@ std::vector<Vec3d> smoothest_field(const isochart::Mesh& mesh, const isochart::T
   return d;
 }
 
-}  // namespace
-
-namespace {
 // A projected direction shorter than this (the direction within about 17° of the normal) is
 // blended with a perpendicular axis in direction_field.
 constexpr double kMinProjected = 0.3;
+
 }  // namespace
 
 double direction_along_normal_share(const isochart::Mesh& mesh, const Vec3d& direction) {
