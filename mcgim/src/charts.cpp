@@ -264,6 +264,16 @@ void build_chart(const Mesh& m, int c, Chart& ch) {
   if (loops.size() > 1 && euler == 2 - static_cast<long long>(loops.size())) {
     ch.slits = choose_slits(ch, loops);
     if (!ch.slits.empty()) {
+      // The outer loop encloses the largest texture area; the others are holes.
+      std::size_t outer = 0;
+      std::vector<double> area(loops.size(), 0.0);
+      for (std::size_t l = 0; l < loops.size(); ++l) {
+        for (std::size_t i = 0; i < loops[l].size(); ++i)
+          area[l] += cross(ch.uv[loops[l][i]], ch.uv[loops[l][(i + 1) % loops[l].size()]]);
+        if (std::abs(area[l]) > std::abs(area[outer])) outer = l;
+      }
+      for (std::size_t l = 0; l < loops.size(); ++l)
+        if (l != outer) ch.holes.push_back(loops[l]);
       std::vector<std::pair<int, int>> cuts;
       for (const auto& path : ch.slits)
         for (std::size_t i = 0; i + 1 < path.size(); ++i)

@@ -31,6 +31,9 @@ struct Chart {
   // Cuts added to open a chart with holes into a disk, as chart vertex paths from a hole to
   // the rest of the boundary (vertex ids of one side; the other side has the same uvs).
   std::vector<std::vector<int>> slits;
+  // The loops of those holes (chart vertex ids; each id keeps its uv after the slits split
+  // vertices): a sample whose centre lies inside one would close the hole.
+  std::vector<std::vector<int>> holes;
 };
 
 // A maximal run of a chart's loop between two consecutive nodes: one side of a cut path.

@@ -537,6 +537,15 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
     }
   isochart::report(progress, isochart::Stage::Sampling, 0.5);
 
+  // Opens the slits of a chart with holes: no block triangle may cross a slit, so every
+  // sample within √2/2 of it goes (each crossing triangle edge has an end that close).
+  auto remove_slit_samples = [&](LocalGrid& g, int c, long long* removed = nullptr) {
+    long long count = 0;
+    for (const auto& slit : a.charts[c].slits)
+      for (std::size_t i = 0; i + 1 < slit.size(); ++i)
+        remove_near_segment(g, pl.texel[c][slit[i]], pl.texel[c][slit[i + 1]], 0.75, count);
+    if (removed) *removed += count;
+  };
   // Cleanup per chart, in parallel: the charts' samples are disjoint.
   s.regions.resize(nc);
   tbb::parallel_for(0, nc, [&](int c) {
@@ -547,11 +556,7 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
     for (const Hit& h : hits[c]) hit_samples.push_back(h.sample);
     LocalGrid g = grid_around(hit_samples, W);
     auto to_image = [&](int v) { return g.to_image(v, W); };
-    // Open the slits of a chart with holes: no block triangle may cross a slit, so every
-    // sample within √2/2 of it goes (each crossing triangle edge has an end that close).
-    for (const auto& slit : a.charts[c].slits)
-      for (std::size_t i = 0; i + 1 < slit.size(); ++i)
-        remove_near_segment(g, pl.texel[c][slit[i]], pl.texel[c][slit[i + 1]], 0.75, r.removed);
+    remove_slit_samples(g, c, &r.removed);
     // Bridges across notches come out, unless that cuts off a part of the chart (a notch
     // almost through it): losing the part costs more than a bridge, which zippering survives.
     const LocalGrid whole = g;
@@ -676,6 +681,23 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
     }
     std::sort(cand.begin(), cand.end());
     cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+    // A hole narrower than two texels has texels the triangles around it touch; a sample
+    // there would close the hole.
+    auto in_hole = [&](int i) {
+      const Vec2d p{i % W + 0.5, i / W + 0.5};
+      for (const auto& hole : ch.holes) {
+        bool inside = false;
+        for (std::size_t k = 0, j = hole.size() - 1; k < hole.size(); j = k++) {
+          const Vec2d& q0 = pl.texel[c][hole[k]];
+          const Vec2d& q1 = pl.texel[c][hole[j]];
+          if ((q0.y > p.y) != (q1.y > p.y) && p.x < q0.x + (p.y - q0.y) * (q1.x - q0.x) / (q1.y - q0.y))
+            inside = !inside;
+        }
+        if (inside) return true;
+      }
+      return false;
+    };
+    cand.erase(std::remove_if(cand.begin(), cand.end(), in_hole), cand.end());
     return cand;
   };
   // A part of a chart joined to the rest by a neck thinner than a sample was cut off above and
@@ -693,6 +715,8 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
     set.erase(std::unique(set.begin(), set.end()), set.end());
     LocalGrid g = grid_around(set, W);
     long long dropped = 0;
+    // The texels added back include those taken off the slits above; they go again.
+    remove_slit_samples(g, c);
     std::vector<int> ring = make_disk(g, dropped);
     auto to_image = [&](int v) { return g.to_image(v, W); };
     std::vector<int> samples;
