@@ -61,6 +61,11 @@ struct Context {
   std::shared_ptr<ProgressState> progress_state;
 };
 
+/// The largest geometry image side any command builds. A level takes about 600 bytes a
+/// sample at 2048² (2.4 GB, 14 s on eight.off); 4096² took over 14 GB and 300 s without
+/// finishing.
+constexpr int kMaxImageSide = 2048;
+
 /// CLI11's own PositiveNumber prints the range 0 .. DBL_MAX in full; this names the rule.
 inline const CLI::Validator positive{
     [](std::string& v) {

@@ -251,39 +251,16 @@ class Bench {
   // search. Each trial packs anew, so counts move in steps of a few percent at small sizes: after
   // the rescaling steps, the neighbours of the best size are walked one side at a time. Trials
   // skip the sample optimization (it moves samples, never adds or drops them).
-  mcgim::Level matched_level(const isochart::Mesh& atlas_mesh, long long target) {
+  // `note` says so when the match needs an image beyond the largest side.
+  mcgim::Level matched_level(const isochart::Mesh& atlas_mesh, long long target, std::string& note) {
     mcgim::LevelOptions lo;
-    lo.optimize = false;
-    const mcgim::ResolutionChoice rc = mcgim::choose_resolution(atlas_mesh, target, lo, ctx_.progress());
-    std::map<std::array<int, 2>, long long> tried;
-    std::array<int, 2> best{rc.width, rc.height};
-    auto off = [&](long long d) { return std::llabs(d - target); };
-    auto trial = [&](int w, int h) {
-      w = std::clamp(w, 4, 8192);
-      h = std::clamp(h, 4, 8192);
-      if (tried.count({w, h})) return;
-      lo.width = w;
-      lo.height = h;
-      const long long d = mcgim::build_level(atlas_mesh, lo, ctx_.progress()).stats.defined_samples;
-      tried[{w, h}] = d;
-      if (tried.size() == 1 || off(d) < off(tried[best])) best = {w, h};
-    };
-    auto good = [&] { return off(tried[best]) * 50 <= target; };
-    trial(best[0], best[1]);
-    for (int it = 0; it < 3 && !good(); ++it) {
-      const long long d = tried[best];
-      const double s = d > 0 ? std::sqrt(static_cast<double>(target) / d) : 2.0;
-      const int w = static_cast<int>(std::lround(best[0] * s)), h = static_cast<int>(std::lround(best[1] * s));
-      if (tried.count({w, h})) break;
-      trial(w, h);
-    }
-    for (int ring = 1; ring <= 3 && !good(); ++ring)
-      for (int dw = -ring; dw <= ring && !good(); ++dw)
-        for (int dh = -ring; dh <= ring && !good(); ++dh)
-          if (std::max(std::abs(dw), std::abs(dh)) == ring) trial(best[0] + dw, best[1] + dh);
-    lo.optimize = true;
-    lo.width = best[0];
-    lo.height = best[1];
+    const mcgim::ResolutionChoice rc =
+        mcgim::match_resolution(atlas_mesh, target, lo, ctx_.progress(), kMaxImageSide);
+    if (rc.capped)
+      note = "at most " + std::to_string(kMaxImageSide) + "x" + std::to_string(kMaxImageSide) +
+             ", fewer samples than the first method";
+    lo.width = rc.width;
+    lo.height = rc.height;
     return mcgim::build_level(atlas_mesh, lo, ctx_.progress());
   }
 
@@ -305,7 +282,7 @@ class Bench {
       lv = mcgim::build_level(m, lo, ctx_.progress());
       target = lv.stats.defined_samples;
     } else {
-      lv = matched_level(m, target);
+      lv = matched_level(m, target, r.note);
     }
     r.s_mcgim = std::chrono::duration<double>(Clock::now() - t0).count();
     r.target = target;

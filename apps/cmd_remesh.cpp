@@ -23,9 +23,8 @@ namespace cli {
 
 namespace {
 
-// About 600 bytes per sample at 2048² (2.4 GB, 14 s on eight.off); 4096² took over 14 GB and
-// 300 s without finishing, so 2048 a side is the limit, --samples included.
-constexpr int kMaxSide = 2048;
+// --samples included.
+constexpr int kMaxSide = kMaxImageSide;
 
 struct RemeshArgs {
   std::string input;

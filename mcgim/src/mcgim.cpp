@@ -1,8 +1,10 @@
 #include "mcgim/mcgim.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <map>
 #include <string>
 
 #include "charts.h"
@@ -248,6 +250,46 @@ ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target
     res = std::min(wanted, max_side);
   }
   return best;
+}
+
+ResolutionChoice match_resolution(const isochart::Mesh& atlas, long long target, const LevelOptions& options,
+                                  const isochart::Progress& progress, int max_side) {
+  LevelOptions o = options;
+  o.optimize = false;  // the sample count does not depend on it
+  ResolutionChoice rc = choose_resolution(atlas, target, o, progress, max_side);
+  if (rc.capped) return rc;
+  std::map<std::array<int, 2>, long long> tried;
+  std::array<int, 2> best{rc.width, rc.height};
+  auto off = [&](long long d) { return std::llabs(d - target); };
+  auto trial = [&](int w, int h) {
+    w = std::clamp(w, 4, max_side);
+    h = std::clamp(h, 4, max_side);
+    if (tried.count({w, h})) return;
+    o.width = w;
+    o.height = h;
+    const long long d = build_level(atlas, o, progress).stats.defined_samples;
+    tried[{w, h}] = d;
+    if (tried.size() == 1 || off(d) < off(tried[best])) best = {w, h};
+  };
+  auto good = [&] { return off(tried[best]) * 50 <= target; };
+  trial(best[0], best[1]);
+  for (int it = 0; it < 3 && !good(); ++it) {
+    const long long d = tried[best];
+    const double s = d > 0 ? std::sqrt(static_cast<double>(target) / d) : 2.0;
+    const int w = static_cast<int>(std::lround(best[0] * s)), h = static_cast<int>(std::lround(best[1] * s));
+    if (tried.count({std::clamp(w, 4, max_side), std::clamp(h, 4, max_side)})) break;
+    trial(w, h);
+  }
+  // Cleanup makes the count jump by whole rows of a chart: the sizes around the best, by ring.
+  for (int ring = 1; ring <= 3 && !good(); ++ring)
+    for (int dw = -ring; dw <= ring && !good(); ++dw)
+      for (int dh = -ring; dh <= ring && !good(); ++dh)
+        if (std::max(std::abs(dw), std::abs(dh)) == ring) trial(best[0] + dw, best[1] + dh);
+  rc.width = best[0];
+  rc.height = best[1];
+  rc.defined_samples = tried[best];
+  rc.trials += static_cast<int>(tried.size());
+  return rc;
 }
 
 }  // namespace mcgim

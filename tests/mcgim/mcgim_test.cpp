@@ -324,6 +324,25 @@ TEST_CASE("the resolution search reaches the sample budget", "[mcgim]") {
   CHECK(capped.defined_samples < 8000);
 }
 
+TEST_CASE("the matched resolution holds the budget after cleanup, within the largest side", "[mcgim]") {
+  const isochart::Mesh m = mcgim_test::sphere_atlas(16, 32);
+  LevelOptions o;
+  o.repack = false;
+  const ResolutionChoice c = match_resolution(m, 3000, o);
+  INFO(c.width << "x" << c.height << " (" << c.defined_samples << ")");
+  CHECK(!c.capped);
+  CHECK(std::abs(c.defined_samples - 3000) <= 60);
+  o.width = c.width;
+  o.height = c.height;
+  CHECK(build_level(m, o).stats.defined_samples == c.defined_samples);
+  // `bench` matched other atlases' samples with images up to 8192² (40 GB) though every
+  // other command stops at 2048²: beyond the largest side it takes that side, untried.
+  const ResolutionChoice capped = match_resolution(m, 8000, o, {}, 64);
+  CHECK(capped.capped);
+  CHECK(capped.width == 64);
+  CHECK(capped.height == 64);
+}
+
 TEST_CASE("geometry images are written as EXR and PNG", "[mcgim][io]") {
   const Level lv = build_level(mcgim_test::sphere_atlas(12, 24), keep_layout(32));
   const std::string dir = std::filesystem::temp_directory_path() / "mcgim_io_test";
