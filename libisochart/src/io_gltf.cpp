@@ -156,18 +156,25 @@ class GltfReader {
  private:
   [[noreturn]] void fail(const std::string& message) const { throw InputError(path_, message); }
 
-  void visit(int node, const Mat4& parent) {
-    if (node < 0 || node >= static_cast<int>(model_.nodes.size()))
-      fail("node " + std::to_string(node) + " does not exist");
-    // glTF nodes form a forest; a second visit means a cycle or a shared child, either of
-    // which could make the traversal endless or exponential.
-    if (visited_[node])
-      fail("node " + std::to_string(node) + " is reached twice (a cycle or a node with two parents)");
-    visited_[node] = 1;
-    const tinygltf::Node& n = model_.nodes[node];
-    const Mat4 world = multiply(parent, local_transform(n));
-    if (n.mesh >= 0) add_mesh(n.mesh, world);
-    for (int c : n.children) visit(c, world);
+  // Depth first, children in order, with a stack of its own: a chain of nodes as deep as the
+  // file is long would overflow the call stack (20,000 levels did).
+  void visit(int root, const Mat4& parent) {
+    std::vector<std::pair<int, Mat4>> stack{{root, parent}};
+    while (!stack.empty()) {
+      const auto [node, above] = stack.back();
+      stack.pop_back();
+      if (node < 0 || node >= static_cast<int>(model_.nodes.size()))
+        fail("node " + std::to_string(node) + " does not exist");
+      // glTF nodes form a forest; a second visit means a cycle or a shared child, either of
+      // which could make the traversal endless or exponential.
+      if (visited_[node])
+        fail("node " + std::to_string(node) + " is reached twice (a cycle or a node with two parents)");
+      visited_[node] = 1;
+      const tinygltf::Node& n = model_.nodes[node];
+      const Mat4 world = multiply(above, local_transform(n));
+      if (n.mesh >= 0) add_mesh(n.mesh, world);
+      for (auto c = n.children.rbegin(); c != n.children.rend(); ++c) stack.emplace_back(*c, world);
+    }
   }
 
   AccessorView view(int index, const std::string& what, std::initializer_list<int> types,

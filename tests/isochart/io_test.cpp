@@ -629,6 +629,20 @@ TEST_CASE("glTF: primitives, modes, index types and transforms", "[io]") {
   CHECK_THAT(load_error(d.file("external.gltf")), Catch::StartsWith("invalid glTF") && Catch::Contains("is a directory"));
 }
 
+TEST_CASE("glTF: a chain of nodes deeper than the call stack loads", "[io]") {
+  // The scene was walked by one recursive call per level: 20,000 levels crashed the program.
+  TempDir d;
+  GltfSample s = gltf_sample();
+  const int depth = 50000;
+  nlohmann::json nodes = nlohmann::json::array();
+  for (int i = 0; i < depth; ++i) nodes.push_back({{"children", {i + 1}}, {"translation", {1e-3, 0, 0}}});
+  nodes.push_back({{"mesh", 0}});
+  s.doc["nodes"] = nodes;
+  const RawMesh r = read_raw_mesh(d.write("deep.glb", glb_of(s)));
+  REQUIRE(r.positions.size() == 4);
+  CHECK(r.positions[2].x == Approx(1 + depth * 1e-3).epsilon(1e-9));
+}
+
 TEST_CASE("glTF: malformed files are clear errors", "[io]") {
   TempDir d;
   GltfSample s = gltf_sample();
