@@ -79,6 +79,22 @@ inline const CLI::Validator positive{
     },
     "POSITIVE"};
 
+/// A number in [lo, hi]. CLI::Range compares with < and >, so "nan" passed it.
+inline CLI::Validator number_in(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& v) {
+        try {
+          std::size_t used = 0;
+          const double x = std::stod(v, &used);
+          if (used == v.size() && x >= lo && x <= hi) return std::string();
+        } catch (const std::exception&) {
+        }
+        // CLI::Range's wording, which Context rewrites for every range alike.
+        return "Value " + v + " not in range " + std::to_string(lo) + " to " + std::to_string(hi);
+      },
+      "NUMBER");
+}
+
 /// A seed: 0 .. 2^64 − 1 in decimal. CLI11 would take "-1" or a 30-digit number silently
 /// (wrapped or saturated), and a run could not be repeated from its printed seed.
 inline const CLI::Validator seed_value{

@@ -264,7 +264,7 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
          "--split-efficiency", args->signal_options.split_efficiency,
          "Split large signal charts whose uniform texel density reaches less than this fraction of the "
          "ideal signal energy (0 = off)")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(number_in(0.0, 1.0))
       ->capture_default_str();
   sub->add_option("--max-geometric-l2", args->signal_options.max_geometric_l2,
                   "Geometric L2 stretch bound kept by signal charts")

@@ -149,7 +149,7 @@ void add_render(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--aspect", args->aspect,
                   "With --uv-layout: width / height of the texture the UVs address, so the layout is drawn "
                   "as the texture looks (default 1)")
-      ->check(CLI::Range(1.0 / 16384, 16384.0));
+      ->check(number_in(1.0 / 16384, 16384.0));
   sub->add_option("--views", args->views,
                   "Number of views side by side: front, right, back, left, top, bottom, "
                   "front-right, back-left")

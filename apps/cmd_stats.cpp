@@ -70,7 +70,7 @@ void add_stats(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--aspect", args->aspect,
                   "Width / height of the texture the UVs address (stretch is measured in texels; "
                   "default 1, a square texture)")
-      ->check(CLI::Range(1.0 / 16384, 16384.0));
+      ->check(number_in(1.0 / 16384, 16384.0));
   sub->footer("Example: isocharts stats ../shared/data/baseline_atlases/bunny_uvatlas.obj");
   sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_stats(ctx, *args); }; });
 }

@@ -88,7 +88,6 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
     if (!(largest > 0)) bad_option("--direction must be a finite, non-zero vector x,y,z");
     for (double& x : direction) x /= largest;
   }
-  if (std::isnan(a.coherence)) bad_option("--coherence must be a number");
   // Checked here, not only in the library, so that a typo fails before the atlas is built.
   if (a.neighborhood % 2 == 0) bad_option("--neighborhood must be odd (3, 5, 7, ...), not " + std::to_string(a.neighborhood));
   if (a.coarse_neighborhood % 2 == 0)
@@ -281,10 +280,11 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
                   "Rounds of the as-rigid-as-possible fit of the first level's exemplar copy (keeps the "
                   "exemplar's scale, lets directions drift; default -1: 20 with a 4-direction field, else 0)")
       ->check(CLI::Range(-1, 100));
-  sub->add_option("--coherence", args->coherence,
-                  "How much better (relative neighbourhood distance) a match elsewhere in the exemplar must be "
-                  "than continuing a neighbour's patch (default 0.1)")
-      ->check(CLI::Range(0.0, 10.0));
+  sub->add_option(
+         "--coherence", args->coherence,
+         "How much better (relative neighbourhood distance) a match elsewhere in the exemplar must be "
+         "than continuing a neighbour's patch (default 0.1)")
+      ->check(number_in(0.0, 10.0));
   sub->add_option("--start-samples", args->start_samples,
                   "Never synthesize pyramid levels with fewer samples than N (default 1000)")
       ->check(CLI::Range(1, 1 << 28));

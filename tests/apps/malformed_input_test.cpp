@@ -734,6 +734,31 @@ TEST_CASE("atlas says when the bounds need more charts than --max-charts, and ch
   CHECK_THAT(read_bytes(err), Catch::Contains("has an empty item"));
 }
 
+TEST_CASE("options taking a number in a range refuse nan", "[cli]") {
+  // CLI::Range compares with < and >, which nan passes: stats --aspect nan measured every
+  // triangle as zero-area with exit 0, and --split-efficiency nan ran as 0 (off).
+  TempDir tmp("nan_options");
+  const fs::path err = tmp.path / "err.txt";
+  const std::string dir = " '" + tmp.path.string() + "/";
+  const struct {
+    std::string args, option;
+  } cases[] = {
+      {"stats builtin:sphere --aspect nan", "--aspect"},
+      {"render builtin:sphere --uv-layout --aspect nan -o" + dir + "r.png'", "--aspect"},
+      {"render builtin:sphere --aspect nan -o" + dir + "r.png'", "--aspect"},
+      {"atlas builtin:sphere --signal normals --split-efficiency nan -o" + dir + "a.obj'",
+       "--split-efficiency"},
+      {"synth builtin:sphere --coherence nan -o" + dir + "s.glb'", "--coherence"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.args);
+    CHECK(run_cli(c.args, err) == 2);
+    CHECK_THAT(read_bytes(err),
+               Catch::Contains(c.option + ": expected a number from") && Catch::Contains("got 'nan'"));
+  }
+  CHECK(std::distance(fs::directory_iterator(tmp.path), fs::directory_iterator()) == 1);
+}
+
 TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
   // Faces without vt read the texel at (0, 0): half the surface got a made-up signal.
   TempDir tmp("signal_uvs");
