@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "isochart/error.h"
 #include "isochart/signal.h"
@@ -215,7 +216,7 @@ SaeResult signal_approximation_error(const Mesh& mesh, const Signal& signal, int
     for (int c = 0; c < dim; ++c) mean2 += (sum[c] / total) * (sum[c] / total);
     r.signal_rms = std::sqrt(std::max(sq / total - mean2, 0.0));
   }
-  if (baked) *baked = img;
+  if (baked) *baked = std::move(img);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }

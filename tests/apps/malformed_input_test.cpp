@@ -730,6 +730,9 @@ TEST_CASE("atlas says when the bounds need more charts than --max-charts, and ch
   CHECK_THAT(read_bytes(err), !Catch::Contains("--max-charts"));
   CHECK(run_cli("atlas builtin:sphere --signal normals --split-efficiency 5" + out, err) == 2);
   CHECK_THAT(read_bytes(err), Catch::Contains("--split-efficiency: expected a number from 0 to 1"));
+  // sae's limit: 16384² took 6.3 GB after the whole atlas was built.
+  CHECK(run_cli("atlas builtin:sphere --signal normals --sae-res 16384" + out, err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("--sae-res: expected an integer from 1 to 8192"));
   CHECK(run_cli("bench builtin:sphere --sweep 1.1,,1.2 --out '" + (tmp.path / "b").string() + "'", err) == 2);
   CHECK_THAT(read_bytes(err), Catch::Contains("has an empty item"));
 }
