@@ -94,6 +94,10 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
     bad_option("--coarse-neighborhood must be odd (1, 3, 5, ...), not " + std::to_string(a.coarse_neighborhood));
   if (a.scale > 0 && a.pixels_per_texel > 0) bad_option("--scale and --pixels-per-texel are exclusive");
   check_levels(a.levels);
+  if (a.start_level >= static_cast<int>(a.levels.size()))
+    bad_option("--start-level " + std::to_string(a.start_level) + ": the pyramid has " +
+               std::to_string(a.levels.size()) + " levels, 0 (finest) to " +
+               std::to_string(a.levels.size() - 1));
   long long clipped = 0;
   const isochart::Image exemplar = synth::exemplar_from(a.exemplar, &clipped);
   // An HDR exemplar comes out mostly white or black; the user should hear why.
@@ -167,6 +171,11 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
     else if (a.scale > 0) opt << "--scale " << a.scale << ": ";
     bad_option(opt.str() + what);
   }
+  if (a.start_level >= 0 && r.start_level != a.start_level)
+    ctx.warn(a.input, "--start-level " + std::to_string(a.start_level) + ": started at level " +
+                          std::to_string(r.start_level) + " (" + std::to_string(a.levels[r.start_level]) +
+                          "²); the coarser levels hold fewer than --start-samples " +
+                          std::to_string(so.min_level_samples) + " samples");
 
   const auto tt = std::chrono::steady_clock::now();
   const isochart::Image atlas_tex = synth::transfer_to_atlas(atlas, pyramid[0], r.texture, a.atlas_size,
@@ -288,10 +297,12 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--start-samples", args->start_samples,
                   "Never synthesize pyramid levels with fewer samples than N (default 1000)")
       ->check(CLI::Range(1, 1 << 28));
-  sub->add_option("--start-level", args->start_level,
-                  "Pyramid level synthesis starts at, 0 = finest (default -1: automatic, from the "
-                  "exemplar's correlation length against the coarsest level's neighbourhood footprint and its "
-                  "smoothness at the finest texel)")
+  sub->add_option(
+         "--start-level", args->start_level,
+         "Pyramid level synthesis starts at, 0 = finest, never one with fewer than --start-samples "
+         "samples (default -1: automatic, from the "
+         "exemplar's correlation length against the coarsest level's neighbourhood footprint and its "
+         "smoothness at the finest texel)")
       ->check(CLI::Range(-1, 64));
   sub->add_option("--symmetry", args->symmetry,
                   "Rotational symmetry N of the computed direction field: directions equal up to "

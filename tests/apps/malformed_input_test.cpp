@@ -762,6 +762,22 @@ TEST_CASE("options taking a number in a range refuse nan", "[cli]") {
   CHECK(std::distance(fs::directory_iterator(tmp.path), fs::directory_iterator()) == 1);
 }
 
+TEST_CASE("synth says when it cannot start at the --start-level asked for", "[cli]") {
+  // The level was lowered to one with --start-samples samples without a word, and an index
+  // past the pyramid ran like the default.
+  TempDir tmp("start_level");
+  const fs::path err = tmp.path / "err.txt";
+  const std::string out = " -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32,16 --atlas-size 64";
+  CHECK(run_cli("synth builtin:sphere --start-level 3" + out, err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("--start-level 3: the pyramid has 3 levels, 0 (finest) to 2"));
+  CHECK(!fs::exists(tmp.path / "s.glb"));
+  CHECK(run_cli("synth builtin:sphere --start-level 2" + out, err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains("--start-level 2: started at level 0 (64²)") &&
+                                  Catch::Contains("fewer than --start-samples 1000 samples"));
+  CHECK(run_cli("synth builtin:sphere --start-level 2 --start-samples 16" + out, err) == 0);
+  CHECK_THAT(read_bytes(err), !Catch::Contains("--start-level"));
+}
+
 TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
   // Faces without vt read the texel at (0, 0): half the surface got a made-up signal.
   TempDir tmp("signal_uvs");
