@@ -23,8 +23,11 @@ namespace cli {
 
 namespace {
 
-// --samples included.
+// The largest side, --samples included.
 constexpr int kMaxSide = kMaxImageSide;
+// One chart and its one-texel gutter need 4 samples a side; more charts need more, which
+// packing says.
+constexpr int kMinSide = 4;
 
 struct RemeshArgs {
   std::string input;
@@ -345,15 +348,17 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
       ->required();
   sub->add_option("--res", args->res,
                   "Square image resolution (default 256; at most 2048, ~600 bytes a sample)")
-      ->check(CLI::Range(2, kMaxSide));
+      ->check(CLI::Range(kMinSide, kMaxSide));
   sub->add_option("--samples", args->samples,
                   "Choose the square resolution giving about N defined samples (at most 2048x2048)")
       ->check(CLI::Range(16LL, 4'194'304LL));
-  sub->add_option("--width", args->width, "Image width (with --height)")->check(CLI::Range(2, kMaxSide));
-  sub->add_option("--height", args->height, "Image height (with --width)")->check(CLI::Range(2, kMaxSide));
+  sub->add_option("--width", args->width, "Image width (with --height)")
+      ->check(CLI::Range(kMinSide, kMaxSide));
+  sub->add_option("--height", args->height, "Image height (with --width)")
+      ->check(CLI::Range(kMinSide, kMaxSide));
   sub->add_option("--levels", args->levels, "Pyramid of square resolutions, e.g. 256,128,64,32")
       ->delimiter(',')
-      ->check(CLI::Range(2, kMaxSide));
+      ->check(CLI::Range(kMinSide, kMaxSide));
   sub->add_option("--atlas", args->atlas, "Use this atlas (a mesh with texture coordinates) instead of "
                                           "building the iso-chart atlas of the input");
   sub->add_option("--exr", args->exr, "Write each level as PREFIX_WxH.exr (float positions, normals, "

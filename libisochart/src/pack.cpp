@@ -334,6 +334,10 @@ Search search_scale(const std::vector<Prepared>& prepared, int rotations,
   return search;
 }
 
+std::string texels(int n) {
+  return std::to_string(n) + (n == 1 ? " texel" : " texels");
+}
+
 void validate(const PackOptions& o) {
   auto bad = [](const std::string& m) { throw InputError("", m); };
   constexpr int kMax = PackOptions::kMaxSize;
@@ -342,8 +346,8 @@ void validate(const PackOptions& o) {
         std::to_string(kMax));
   if (o.gutter < 0) bad("pack: gutter " + std::to_string(o.gutter) + " is negative");
   if (o.width - 2 * o.gutter < 1 || o.height - 2 * o.gutter < 1)
-    bad("pack: a gutter of " + std::to_string(o.gutter) + " texels leaves no room in a " +
-        std::to_string(o.width) + "x" + std::to_string(o.height) + " texture");
+    bad("pack: a gutter of " + texels(o.gutter) + " leaves no room in a " + std::to_string(o.width) + "x" +
+        std::to_string(o.height) + " texture");
   if (o.rotations < 0 || o.rotations > 360)
     bad("pack: rotations " + std::to_string(o.rotations) + " is outside 0..360");
   if (!(o.growth_weight >= 0) || !std::isfinite(o.growth_weight))
@@ -422,9 +426,10 @@ PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& option
   Search best_search = search_scale(prepared, rotations, orders, base, options, total_area,
                                     std::sqrt(0.75 * limit_w * limit_h / total_area), tick, attempts_done);
   if (best_search.fits <= 0)
-    throw InputError("", "pack: the " + std::to_string(n) + " charts do not fit a " +
-                             std::to_string(options.width) + "x" + std::to_string(options.height) +
-                             " texture with a gutter of " + std::to_string(g) + " texels");
+    throw InputError("", std::string("pack: ") +
+                             (n == 1 ? "the chart does" : "the " + std::to_string(n) + " charts do") +
+                             " not fit a " + std::to_string(options.width) + "x" +
+                             std::to_string(options.height) + " texture with a gutter of " + texels(g));
   int attempts = best_search.attempts;
   const double base_fits = best_search.fits;
   // The largest rung where some variant fits wins (its densest packing there), so the rungs

@@ -388,7 +388,12 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(run_cli(atlas + " --max-l2 1.1x", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --max-l2: expected a number, got '1.1x'\n"));
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --res 12x", err) == 2);
-  CHECK_THAT(line(), Catch::Equals("isocharts: error: --res: expected an integer from 2 to 2048, got '12x'\n"));
+  CHECK_THAT(line(),
+             Catch::Equals("isocharts: error: --res: expected an integer from 4 to 2048, got '12x'\n"));
+  // 2 and 3 were allowed, and always failed once the atlas was built: one chart and its gutter need 4.
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --levels 64,3", err) == 2);
+  CHECK_THAT(line(),
+             Catch::Equals("isocharts: error: --levels: expected an integer from 4 to 2048, got '3'\n"));
   CHECK(run_cli(atlas + " --png-size 5", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --png-size: expected an integer from 16 to 2896, got '5'\n"));
   // Options that would do nothing, and empty values that would skip an output, are refused.

@@ -481,6 +481,9 @@ TEST_CASE("bad charts and options are reported by name", "[pack]") {
   o.width = 4;
   o.gutter = 2;
   CHECK_THAT(message({good}, o), Catch::Contains("leaves no room"));
+  o.width = o.height = 3;
+  o.gutter = 1;
+  CHECK(message({good}, o) == "pack: the chart does not fit a 3x3 texture with a gutter of 1 texel");
   o = {};
   o.rotations = -1;
   CHECK_THAT(message({good}, o), Catch::Contains("rotations"));
