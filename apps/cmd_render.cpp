@@ -32,6 +32,7 @@ struct RenderArgs {
   double aspect = 0;  // --uv-layout: texture width / height (0: square)
   std::string up = "y";  // the model's up axis: x, y, z, -x, -y or -z
   bool views_or_up_given = false;
+  bool supersample_given = false;
 };
 
 isochart::Vec3d up_axis(const std::string& name) {
@@ -54,6 +55,9 @@ void run_render(const Context& ctx, const RenderArgs& a) {
     bad_option(
         "--uv-layout draws the atlas itself; it takes no --texture, --wireframe, --ortho or --transparent");
   if (a.uv_layout && a.views_or_up_given) bad_option("--uv-layout draws texture space; it takes no --views or --up");
+  if (a.uv_layout && a.supersample_given)
+    bad_option("--uv-layout always draws with " + std::to_string(isochart::kUvLayoutSupersample) + "x" +
+               std::to_string(isochart::kUvLayoutSupersample) + " supersampling; it takes no --supersample");
   if (a.transparent) {
     std::string ext = a.output.substr(std::min(a.output.size(), a.output.find_last_of('.')));
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -65,10 +69,12 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   const auto [layout_w, layout_h] = layout_size(1024, aspect);
   const int width = a.width > 0 ? a.width : (a.uv_layout ? layout_w : 400 * a.views);
   const int height = a.height > 0 ? a.height : (a.uv_layout ? layout_h : 400);
-  if (static_cast<long long>(width) * height * a.supersample * a.supersample > (1LL << 25))
-    bad_option("--width/--height/--supersample: " + std::to_string(width) + "x" + std::to_string(height) +
-               " pixels at supersample " + std::to_string(a.supersample) +
-               " is too large to render (width x height x supersample² at most 33554432, e.g. 4096x2048 at 2)");
+  const int ss = a.uv_layout ? isochart::kUvLayoutSupersample : a.supersample;
+  if (static_cast<long long>(width) * height * ss * ss > (1LL << 25))
+    bad_option(
+        "--width/--height/--supersample: " + std::to_string(width) + "x" + std::to_string(height) +
+        " pixels at supersample " + std::to_string(ss) +
+        " is too large to render (width x height x supersample² at most 33554432, e.g. 4096x2048 at 2)");
   if (!a.uv_layout && width < a.views)
     bad_option("--width " + std::to_string(width) + " is too small for " + std::to_string(a.views) +
                " views");
@@ -173,6 +179,7 @@ void add_render(CLI::App& app, Context& ctx, Action& action) {
       "  isocharts render atlas.obj --uv-layout -o layout.png");
   sub->callback([&ctx, args, sub, &action] {
     args->views_or_up_given = sub->count("--views") > 0 || sub->count("--up") > 0;
+    args->supersample_given = sub->count("--supersample") > 0;
     action = [&ctx, args] { run_render(ctx, *args); };
   });
 }

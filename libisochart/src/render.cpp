@@ -533,7 +533,7 @@ Image render_uv_layout(const Mesh& mesh, int width, int height, double texture_a
   if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates; there is no UV layout to draw");
   if (!(texture_aspect > 0) || !std::isfinite(texture_aspect))
     throw InputError("", "the texture aspect ratio of a UV layout must be a positive number");
-  const int ss = 2;
+  const int ss = kUvLayoutSupersample;
   check_size(width, height, ss);
   check_mesh(mesh);
   check_uvs(mesh);

@@ -428,6 +428,20 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --signal-use goes with --signal\n"));
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --aspect 2", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect goes with --uv-layout\n"));
+  // A UV layout is always drawn at 2x2: --supersample did nothing there, and the size check
+  // used it (4096² at --supersample 1 passed, then the mesh was blamed).
+  CHECK(
+      run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --uv-layout --supersample 1",
+              err) == 2);
+  CHECK_THAT(line(),
+             Catch::Equals("isocharts: error: --uv-layout always draws with 2x2 supersampling; it takes no "
+                           "--supersample\n"));
+  CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() +
+                    "' --uv-layout --width 4096 --height 4096",
+                err) == 2);
+  CHECK_THAT(line(),
+             Catch::StartsWith("isocharts: error: --width/--height/--supersample: 4096x4096 pixels at "
+                               "supersample 2 is too large"));
   // An even neighbourhood is refused before any work.
   CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --neighborhood 4", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --neighborhood must be odd (3, 5, 7, ...), not 4\n"));

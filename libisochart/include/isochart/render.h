@@ -53,8 +53,9 @@ Image render_mesh(const Mesh& mesh, const RenderOptions& options = {});
 /// inside it; otherwise the UV bounding box fills the image. Aspect ratio is preserved, with
 /// a unit of u `texture_aspect` (the texture's width / height) times as long as one of v, so
 /// the layout of a 1024×256 atlas is drawn as the texture looks.
-/// Rendered with 2×2 supersampling, so width × height is limited to 2^23 pixels.
+/// Rendered with kUvLayoutSupersample² samples a pixel, so width × height is limited to 2^23 pixels.
 /// \throw InputError if the mesh has no UVs or the size or aspect is invalid.
+constexpr int kUvLayoutSupersample = 2;
 Image render_uv_layout(const Mesh& mesh_with_uvs, int width, int height, double texture_aspect = 1.0);
 
 /// Colours (RGB in [0, 1]) for charts: `face_chart` gives a chart id per face (ids in
