@@ -257,10 +257,33 @@ std::array<int, 2> layout_size(int longer, double aspect) {
   return aspect >= 1 ? std::array<int, 2>{longer, shorter} : std::array<int, 2>{shorter, longer};
 }
 
-void check_levels(const std::vector<int>& levels) {
-  for (std::size_t i = 0; i < levels.size(); ++i)
-    for (std::size_t j = 0; j < i; ++j)
-      if (levels[i] == levels[j]) bad_option("--levels: " + std::to_string(levels[i]) + " is given twice");
+std::vector<std::string> split_items(const std::string& option, const std::string& text) {
+  std::vector<std::string> items;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', start);
+    items.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (items.back().empty()) bad_option(option + ": '" + text + "' has an empty item");
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return items;
+}
+
+std::vector<int> parse_levels(const std::vector<std::string>& given, int lo, int hi) {
+  std::vector<int> levels;
+  for (const std::string& text : given)
+    for (const std::string& item : split_items("--levels", text)) {
+      const bool digits = item.size() <= 9 && item.find_first_not_of("0123456789") == std::string::npos;
+      const int side = digits ? std::stoi(item) : -1;
+      if (side < lo || side > hi)
+        bad_option("--levels: expected an integer from " + std::to_string(lo) + " to " + std::to_string(hi) +
+                   ", got '" + item + "'");
+      if (std::find(levels.begin(), levels.end(), side) != levels.end())
+        bad_option("--levels: " + item + " is given twice");
+      levels.push_back(side);
+    }
+  return levels;
 }
 
 }  // namespace cli

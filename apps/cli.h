@@ -144,9 +144,13 @@ isochart::MeshFormat output_mesh_format(const std::string& path,
                                         const std::vector<isochart::MeshFormat>& allowed,
                                         const std::string& writes);
 
-/// Refuses a pyramid resolution given twice in --levels (it would be built and written twice
-/// to the same file).
-void check_levels(const std::vector<int>& levels);
+/// The items of a comma-separated option value. An empty item ("64,,32", a trailing comma) is
+/// refused: CLI11's own splitting dropped them silently.
+std::vector<std::string> split_items(const std::string& option, const std::string& text);
+
+/// --levels, given as comma-separated lists: sides from lo to hi, none twice (it would be built
+/// and written twice to the same file).
+std::vector<int> parse_levels(const std::vector<std::string>& given, int lo, int hi);
 
 /// A layout picture in a texture's proportions (width / height = `aspect`), its longer side
 /// `longer` pixels and its shorter at least 16.

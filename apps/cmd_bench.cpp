@@ -80,10 +80,7 @@ struct SweepPoint {
 
 std::vector<Method> parse_methods_impl(const std::string& list) {
   std::vector<Method> out;
-  std::stringstream ss(list);
-  std::string m;
-  while (std::getline(ss, m, ',')) {
-    if (m.empty()) continue;
+  for (const std::string& m : split_items("--methods", list)) {
     Method x{Kind::Isochart, m, ""};
     if (m == "isochart" || m == "iso-charts")
       x = {Kind::Isochart, "isochart", ""};
@@ -108,7 +105,6 @@ std::vector<Method> parse_methods_impl(const std::string& list) {
       if (y.name == x.name) throw isochart::InputError("", "method '" + m + "' given twice");
     out.push_back(x);
   }
-  if (out.empty()) throw isochart::InputError("", "--methods is empty");
   return out;
 }
 
@@ -730,18 +726,18 @@ isochart::Image plot_psnr(const std::vector<Row>& rows) {
 
 std::vector<double> parse_list(const std::string& s) {
   std::vector<double> out;
-  std::stringstream ss(s);
-  std::string x;
-  while (std::getline(ss, x, ',')) {
-    if (x.empty()) bad_option("--sweep: '" + s + "' has an empty item");
+  for (const std::string& x : split_items("--sweep", s)) {
+    double v = NAN;
     try {
       std::size_t used = 0;
-      const double v = std::stod(x, &used);
+      v = std::stod(x, &used);
       if (used != x.size() || !(v >= 1.0) || !std::isfinite(v)) throw std::invalid_argument(x);
-      out.push_back(v);
     } catch (const std::exception&) {
       bad_option("--sweep: '" + x + "' is not an L2 bound (a number ≥ 1)");
     }
+    // The same bound twice gave two identical rows.
+    if (std::find(out.begin(), out.end(), v) != out.end()) bad_option("--sweep: " + x + " is given twice");
+    out.push_back(v);
   }
   return out;
 }

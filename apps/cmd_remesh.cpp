@@ -36,6 +36,7 @@ struct RemeshArgs {
   int res = 0;
   long long samples = 0;
   int width = 0, height = 0;
+  std::vector<std::string> levels_given;  // --levels as typed
   std::vector<int> levels;
   std::string exr, png;
   bool no_optimize = false;
@@ -98,7 +99,6 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   const int modes = (a.res > 0) + (a.samples > 0) + (a.width > 0 || a.height > 0) + !a.levels.empty();
   if (modes > 1) bad_option("--res, --samples, --width/--height and --levels are exclusive");
   if ((a.width > 0) != (a.height > 0)) bad_option("--width and --height go together");
-  check_levels(a.levels);
   if (!a.signal.empty() && !a.atlas.empty()) bad_option("--signal builds the atlas; it does not go with --atlas");
   if (a.signal_use != "param" && a.signal_use != "full") bad_option("--signal-use must be param or full");
   // An option that would be silently ignored is more likely a mistake than a wish.
@@ -356,9 +356,7 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(kMinSide, kMaxSide));
   sub->add_option("--height", args->height, "Image height (with --width)")
       ->check(CLI::Range(kMinSide, kMaxSide));
-  sub->add_option("--levels", args->levels, "Pyramid of square resolutions, e.g. 256,128,64,32")
-      ->delimiter(',')
-      ->check(CLI::Range(kMinSide, kMaxSide));
+  sub->add_option("--levels", args->levels_given, "Pyramid of square resolutions, e.g. 256,128,64,32");
   sub->add_option("--atlas", args->atlas, "Use this atlas (a mesh with texture coordinates) instead of "
                                           "building the iso-chart atlas of the input");
   sub->add_option("--exr", args->exr, "Write each level as PREFIX_WxH.exr (float positions, normals, "
@@ -398,7 +396,10 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
       "      --atlas ../shared/data/baseline_atlases/bunny_xatlas.obj");
   sub->callback([&ctx, args, sub, &action] {
     args->given.record(sub, {"--signal-use", "--fit-passes", "--psnr-samples"});
-    action = [&ctx, args] { run_remesh(ctx, *args); };
+    action = [&ctx, args] {
+      args->levels = parse_levels(args->levels_given, kMinSide, kMaxSide);
+      run_remesh(ctx, *args);
+    };
   });
 }
 

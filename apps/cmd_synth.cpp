@@ -28,7 +28,8 @@ struct SynthArgs {
   double scale = 0;
   double pixels_per_texel = 0;
   std::vector<double> direction;
-  std::vector<int> levels = {256, 128, 64, 32};
+  std::vector<std::string> levels_given{"256,128,64,32"};  // --levels as typed
+  std::vector<int> levels;
   int neighborhood = 5;
   int coarse_neighborhood = 3;
   int full_passes = -1;     // -1: the library's default
@@ -93,7 +94,6 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   if (a.coarse_neighborhood % 2 == 0)
     bad_option("--coarse-neighborhood must be odd (1, 3, 5, ...), not " + std::to_string(a.coarse_neighborhood));
   if (a.scale > 0 && a.pixels_per_texel > 0) bad_option("--scale and --pixels-per-texel are exclusive");
-  check_levels(a.levels);
   if (a.start_level >= static_cast<int>(a.levels.size()))
     bad_option("--start-level " + std::to_string(a.start_level) + ": the pyramid has " +
                std::to_string(a.levels.size()) + " levels, 0 (finest) to " +
@@ -173,7 +173,8 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   }
   if (a.start_level >= 0 && r.start_level != a.start_level)
     ctx.warn(a.input, "--start-level " + std::to_string(a.start_level) + ": started at level " +
-                          std::to_string(r.start_level) + " (" + std::to_string(a.levels[r.start_level]) +
+                          std::to_string(r.start_level) + " (" +
+                          std::to_string(pyramid[r.start_level].stats.width) +
                           "²); the coarser levels hold fewer than --start-samples " +
                           std::to_string(so.min_level_samples) + " samples");
 
@@ -269,9 +270,8 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
       ->check(cli::positive);
   sub->add_option("--direction", args->direction, "Exemplar x axis on the surface, x,y,z (default: smooth field)")
       ->delimiter(',');
-  sub->add_option("--levels", args->levels, "MCGIM pyramid resolutions, any order (default 256,128,64,32; at most 2048)")
-      ->delimiter(',')
-      ->check(CLI::Range(8, 2048));
+  sub->add_option("--levels", args->levels_given,
+                  "MCGIM pyramid resolutions, any order (default 256,128,64,32; 8 to 2048)");
   sub->add_option("--neighborhood", args->neighborhood, "Side of the current-level neighbourhood (odd, default 5)")
       ->check(CLI::Range(3, 15));
   sub->add_option("--coarse-neighborhood", args->coarse_neighborhood,
@@ -313,7 +313,12 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(16, 8192));
   sub->footer("Example:\n  isocharts synth builtin:creature -o creature.glb && "
               "isocharts render creature.glb --texture creature.png --views 4 -o creature_views.png");
-  sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_synth(ctx, *args); }; });
+  sub->callback([&ctx, args, &action] {
+    action = [&ctx, args] {
+      args->levels = parse_levels(args->levels_given, 8, kMaxImageSide);
+      run_synth(ctx, *args);
+    };
+  });
 
   auto ex = std::make_shared<std::pair<std::string, std::string>>();
   auto size = std::make_shared<int>(128);

@@ -797,6 +797,35 @@ TEST_CASE("synth says when it cannot start at the --start-level asked for", "[cl
   CHECK_THAT(read_bytes(err), !Catch::Contains("--start-level"));
 }
 
+TEST_CASE("comma lists refuse empty items and repeats alike", "[cli]") {
+  // CLI11 dropped empty items of --levels silently, bench skipped them in --methods, and
+  // --sweep ran a repeated bound twice.
+  TempDir tmp("lists");
+  const fs::path err = tmp.path / "err.txt";
+  const std::string r = " -o '" + (tmp.path / "r.ply").string() + "'",
+                    s = " -o '" + (tmp.path / "s.glb").string() + "'";
+  const std::string b = " --out '" + (tmp.path / "b").string() + "'";
+  const struct {
+    std::string args, message;
+  } cases[] = {
+      {"remesh builtin:sphere --levels 64,,32" + r, "--levels: '64,,32' has an empty item"},
+      {"remesh builtin:sphere --levels 64,32," + r, "--levels: '64,32,' has an empty item"},
+      {"remesh builtin:sphere --levels 64,32 --levels 32" + r, "--levels: 32 is given twice"},
+      {"synth builtin:sphere --levels 32,,16" + s, "--levels: '32,,16' has an empty item"},
+      {"synth builtin:sphere --levels 32,4" + s, "--levels: expected an integer from 8 to 2048, got '4'"},
+      {"bench builtin:sphere --methods isochart,,lscm" + b, "--methods: 'isochart,,lscm' has an empty item"},
+      {"bench builtin:sphere --methods ," + b, "--methods: ',' has an empty item"},
+      {"bench builtin:sphere --sweep 1.1,1.1" + b, "--sweep: 1.1 is given twice"},
+      {"bench builtin:sphere --sweep 1.1,1.2," + b, "--sweep: '1.1,1.2,' has an empty item"},
+  };
+  for (const auto& c : cases) {
+    INFO(c.args);
+    CHECK(run_cli(c.args, err) == 2);
+    CHECK(read_bytes(err) == "isocharts: error: " + c.message + "\n");
+  }
+  CHECK(std::distance(fs::directory_iterator(tmp.path), fs::directory_iterator()) == 1);  // err.txt
+}
+
 TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
   // Faces without vt read the texel at (0, 0): half the surface got a made-up signal.
   TempDir tmp("signal_uvs");
