@@ -237,6 +237,7 @@ std::vector<std::vector<int>> choose_slits(const Chart& ch, const std::vector<st
 // Chart-local vertices, the boundary loop and the disk check (holes are slit open).
 void build_chart(const Mesh& m, int c, Chart& ch) {
   std::map<std::tuple<int, double, double>, int> key_to_vertex;
+  double unsigned_uv = 0;
   for (int f : ch.faces) {
     Face lf{};
     for (int k = 0; k < 3; ++k) {
@@ -251,11 +252,18 @@ void build_chart(const Mesh& m, int c, Chart& ch) {
       lf[k] = it->second;
     }
     ch.local_faces.push_back(lf);
-    ch.area_uv += isochart::signed_area(ch.uv[lf[0]], ch.uv[lf[1]], ch.uv[lf[2]]);
+    const double a = isochart::signed_area(ch.uv[lf[0]], ch.uv[lf[1]], ch.uv[lf[2]]);
+    ch.area_uv += a;
+    unsigned_uv += std::abs(a);
     ch.area_3d += isochart::triangle_area(m.positions[m.faces[f][0]], m.positions[m.faces[f][1]],
                                           m.positions[m.faces[f][2]]);
   }
-  if (!(std::abs(ch.area_uv) > 0)) throw InputError("", describe(c, ch) + " has zero texture area");
+  // A chart folded onto itself (some triangles mirrored over the others) can sum to nothing.
+  if (!(std::abs(ch.area_uv) > 1e-9 * unsigned_uv))
+    throw InputError("",
+                     describe(c, ch) + (unsigned_uv > 0 ? " folds over itself: its flipped triangles cancel "
+                                                          "the texture area of the others"
+                                                        : " has zero texture area"));
   split_fans(ch, {});
   long long euler = 0;
   std::vector<std::vector<int>> loops = chart_loops(c, ch, euler);

@@ -300,6 +300,15 @@ TEST_CASE("invalid atlases and options are input errors", "[mcgim]") {
   for (const auto& p : closed.positions) closed.uvs.push_back({0.5 + 0.2 * p.x, 0.5 + 0.2 * p.y});
   closed.face_uvs = closed.faces;
   CHECK_THROWS_AS(build_level(closed, keep_layout(64)), isochart::InputError);
+  // A chart whose second triangle is folded back over the first has no net texture area;
+  // that is said, not "zero texture area" (its triangles have plenty).
+  isochart::Mesh folded;
+  folded.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  folded.faces = {{0, 1, 2}, {0, 2, 3}};
+  folded.uvs = {{0.1, 0.1}, {0.9, 0.1}, {0.9, 0.9}, {0.9, 0.1}};
+  folded.face_uvs = folded.faces;
+  folded.face_groups = {0, 0};
+  CHECK_THROWS_WITH(build_level(folded, keep_layout(64)), Catch::Contains("folds over itself"));
 }
 
 TEST_CASE("the resolution search reaches the sample budget", "[mcgim]") {
