@@ -91,7 +91,20 @@ bool parse_double(std::string_view token, double& value) {
   if (token.size() > 1 && token[0] == '+' && token[1] != '-') token.remove_prefix(1);
   const char* end = token.data() + token.size();
   const auto r = std::from_chars(token.data(), end, value);
+  if (r.ec == std::errc::result_out_of_range && r.ptr == end) {
+    // A number beyond the double range is still a number: ±inf (which callers refuse as out
+    // of range), or towards 0 when it underflows, as strtod reads it.
+    value = std::strtod(std::string(token).c_str(), nullptr);
+    return true;
+  }
   return r.ec == std::errc() && r.ptr == end;
+}
+
+std::string not_finite(std::string_view token) {
+  std::string lower(token);
+  for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  const bool named = lower.find("inf") != std::string::npos || lower.find("nan") != std::string::npos;
+  return quoted(token) + (named ? " is not finite" : " is out of range (beyond 1.8e308)");
 }
 
 bool parse_int(std::string_view token, long long& value) {
@@ -112,7 +125,7 @@ double expect_number(std::string_view& rest, const std::string& path, long long 
   if (!next_token(rest, tok)) fail_at_line(path, line, std::string("expected ") + what);
   double v = 0;
   if (!parse_double(tok, v)) fail_at_line(path, line, quoted(tok) + " is not a number");
-  if (!std::isfinite(v)) fail_at_line(path, line, std::string(what) + " " + quoted(tok) + " is not finite");
+  if (!std::isfinite(v)) fail_at_line(path, line, std::string(what) + " " + not_finite(tok));
   return v;
 }
 

@@ -99,8 +99,11 @@ inline bool next_token(std::string_view& s, std::string_view& token) {
 }
 
 /// Parses a whole token as a number (a leading '+' is allowed). nan/inf parse, so that the
-/// caller can name them; out-of-range values and trailing junk do not.
+/// caller can name them, and so do values beyond a double (as ±inf, or towards 0 when they
+/// underflow); trailing junk does not.
 bool parse_double(std::string_view token, double& value);
+/// "'TOKEN' is not finite" for inf/nan text, "... is out of range" for a number beyond a double.
+std::string not_finite(std::string_view token);
 bool parse_int(std::string_view token, long long& value);
 /// True for an optionally signed run of decimal digits, e.g. an index too large for parse_int,
 /// so that readers can call it out of range rather than malformed.

@@ -101,7 +101,7 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
           if (n < 7) fail_at_line(path, ln, quoted(tok) + " is not a number");
           fail_at_line(path, ln, "too many numbers after 'v' (expected x y z, x y z w or x y z r g b)");
         }
-        if (!std::isfinite(c[n])) fail_at_line(path, ln, "coordinate " + quoted(tok) + " is not finite");
+        if (!std::isfinite(c[n])) fail_at_line(path, ln, "coordinate " + not_finite(tok));
         ++n;
       }
       if (n < 3) fail_at_line(path, ln, "expected 3 coordinates after 'v'");
@@ -121,8 +121,7 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
       std::string_view tok;
       if (next_token(rest, tok) && tok[0] != '#') {
         if (!parse_double(tok, uv.y)) fail_at_line(path, ln, quoted(tok) + " is not a number");
-        if (!std::isfinite(uv.y))
-          fail_at_line(path, ln, "texture coordinate " + quoted(tok) + " is not finite");
+        if (!std::isfinite(uv.y)) fail_at_line(path, ln, "texture coordinate " + not_finite(tok));
       }
       raw.uvs.push_back(uv);
     } else if (key == "vn") {

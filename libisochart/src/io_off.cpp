@@ -91,7 +91,7 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
     rest = line;
     while (n < 16 && next_token(rest, tok)) {
       if (!parse_double(tok, c[n])) fail_at_line(path, ln, quoted(tok) + " is not a number");
-      if (!std::isfinite(c[n])) fail_at_line(path, ln, "value " + quoted(tok) + " is not finite");
+      if (!std::isfinite(c[n])) fail_at_line(path, ln, "value " + not_finite(tok));
       ++n;
     }
     if (n < fixed)

@@ -285,7 +285,11 @@ TEST_CASE("OBJ: parse errors name the line", "[io]") {
   auto err = [&](const std::string& body) { return load_error(d.write("bad.obj", head + body)); };
   CHECK(err("v 1 2\n") == "line 4: expected 3 coordinates after 'v'");
   CHECK(err("v 1 nan 2\n") == "line 4: coordinate 'nan' is not finite");
-  CHECK(err("v 1 2 1e999\n") == "line 4: '1e999' is not a number");
+  // A number beyond a double is out of range, not "not a number"; one that underflows reads as 0.
+  CHECK(err("v 1 2 1e999\n") == "line 4: coordinate '1e999' is out of range (beyond 1.8e308)");
+  CHECK(err("v 1 2 -1e999\n") == "line 4: coordinate '-1e999' is out of range (beyond 1.8e308)");
+  CHECK(err("v 1 2 inf\n") == "line 4: coordinate 'inf' is not finite");
+  CHECK(err("vt 0.5 1e400\n") == "line 4: texture coordinate '1e400' is out of range (beyond 1.8e308)");
   CHECK(err("f 1 2\n") == "line 4: face has 2 corners; a face needs at least 3");
   CHECK(err("f 0 1 2\n") == "line 4: vertex index 0 is invalid (OBJ indices start at 1)");
   CHECK_THAT(err("f -1 -2 -4\n"),
