@@ -162,6 +162,8 @@ void check_image_output(const std::string& path) {
   if (ext.empty()) throw InputError(path, "output image needs an extension (.png, .jpg, .exr, ...)");
   if (!image_module().can_write(path.c_str()))
     throw InputError(path, "unsupported image format '" + ext + "' (use .png, .jpg, .exr, .tif, ...)");
+  if (ext == ".pbm")
+    throw InputError(path, "PBM holds black and white only (use .pgm for grey, .png or .ppm)");
 }
 
 void write_image(const std::string& path, const Image& image) {
@@ -174,6 +176,8 @@ void write_image(const std::string& path, const Image& image) {
   const fs::path target(output_target(path));
   const std::string ext = lower_extension(path);
   if (ext.empty()) throw InputError(path, "output image needs an extension (.png, .jpg, .exr, ...)");
+  if (ext == ".pbm")
+    throw InputError(path, "PBM holds black and white only (use .pgm for grey, .png or .ppm)");
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::error_code ec;
   if (!fs::is_directory(dir, ec))
@@ -189,6 +193,19 @@ void write_image(const std::string& path, const Image& image) {
   const bool named = static_cast<int>(image.channel_names.size()) == image.channels;
   // JPEG has no alpha; keep colour (or grey) only.
   if (!named && (ext == ".jpg" || ext == ".jpeg") && (channels == 2 || channels == 4)) --channels;
+  const float* pixels = image.pixels.data();
+  // PGM holds grey only, but the PNM writer puts colour (P6) into a .pgm file as asked.
+  std::vector<float> grey;
+  if (!named && ext == ".pgm" && channels >= 3) {
+    grey.resize(static_cast<std::size_t>(image.width) * image.height);
+    for (std::size_t i = 0; i < grey.size(); ++i) {
+      const float* p = pixels + i * image.channels;
+      grey[i] = 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2];  // Rec. 709 luminance
+    }
+    pixels = grey.data();
+    channels = 1;
+  }
+  const int stride = grey.empty() ? image.channels : 1;
   const int alpha = channels < image.channels ? -1 : image.alpha_channel();  // JPEG dropped it
   std::string names;
   if (named)
@@ -202,9 +219,9 @@ void write_image(const std::string& path, const Image& image) {
 
   char message[1024] = {0};
   track_temporary_file(tmp.string());
-  const int status = m.write(tmp.c_str(), image.width, image.height, channels, image.channels,
-                             image.pixels.data(), is_float ? 1 : 0, alpha, named ? names.c_str() : nullptr,
-                             attributes.data(), message, sizeof message);
+  const int status =
+      m.write(tmp.c_str(), image.width, image.height, channels, stride, pixels, is_float ? 1 : 0, alpha,
+              named ? names.c_str() : nullptr, attributes.data(), message, sizeof message);
   if (status != kIsochartsImageOk) remove_temporary_file(tmp.string());
   if (status == kIsochartsImageUnsupported)
     throw InputError(path, "unsupported image format '" + ext + "' (use .png, .jpg, .exr, .tif, ...)");

@@ -195,6 +195,29 @@ TEST_CASE("JPEG output drops alpha", "[image]") {
   CHECK(std::abs(b.at(3, 3, 0) - 0.5f) < 0.02f);
 }
 
+TEST_CASE("PGM output is grey, PBM is refused", "[image]") {
+  // The PNM writer put colour (P6) into a file named .pgm.
+  TempDir dir;
+  Image a(4, 2, 4, 1.0f);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 4; ++x) {
+      a.at(x, y, 0) = 1.0f;  // red
+      a.at(x, y, 1) = 0.0f;
+      a.at(x, y, 2) = 0.0f;
+    }
+  write_image(dir.file("a.pgm"), a);
+  std::ifstream in(dir.file("a.pgm"), std::ios::binary);
+  std::string magic(2, ' ');
+  in.read(&magic[0], 2);
+  CHECK(magic == "P5");
+  const Image b = read_image(dir.file("a.pgm"));
+  CHECK(b.channels == 1);
+  CHECK(std::abs(b.at(1, 1, 0) - 0.2126f) < 0.01f);
+  CHECK_THROWS_WITH(check_image_output(dir.file("a.pbm")), Catch::Contains("PBM holds black and white only"));
+  CHECK_THROWS_WITH(write_image(dir.file("a.pbm"), a), Catch::Contains("PBM holds black and white only"));
+  CHECK(dir.entries() == 1);
+}
+
 TEST_CASE("formats that read back with other channels are written without a false error", "[image]") {
   // GIF comes back as RGBA; the write check compares the size only ("cut short, disk full?"
   // was reported for every GIF).
