@@ -5,8 +5,10 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <sstream>
+#include <utility>
 
 #include "cli.h"
 #include "isochart/atlas.h"
@@ -107,6 +109,15 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   if (a.given.has("--psnr-samples") && a.no_psnr) bad_option("--psnr-samples does nothing with --no-psnr");
   if (a.keep_chart_sizes && a.atlas.empty())
     bad_option("--keep-chart-sizes goes with --atlas (a signal atlas given as a file)");
+  // A prefix that names a directory would write files called _64x64.png into it.
+  for (const auto& [option, prefix] :
+       {std::pair<std::string, std::string>{"--png", a.png}, {"--exr", a.exr}}) {
+    std::error_code ec;
+    if (!prefix.empty() && (prefix.back() == '/' || std::filesystem::is_directory(prefix, ec)))
+      bad_option(option + " takes a file name prefix (e.g. " +
+                 (std::filesystem::path(prefix) / "gim").string() + " for gim_256x256" +
+                 (option == "--png" ? ".png" : ".exr") + "), not the directory '" + prefix + "'");
+  }
   {
     // Outputs whose sizes are known now (not those of --samples, checked when written).
     const std::vector<std::string> inputs{a.input, a.atlas, signal_texture(a.signal)};

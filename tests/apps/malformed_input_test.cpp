@@ -880,4 +880,14 @@ TEST_CASE("directories, '-' and image prefixes with an extension are named for w
                     "' --png '" + (tmp.path / "prev.png").string() + "'",
                 err) == 0);
   CHECK(fs::exists(tmp.path / "prev_32x32.png"));
+  // A directory as the prefix wrote a file called _32x32.png into it.
+  for (const std::string& dir : {tmp.path.string() + "/", tmp.path.string()}) {
+    CHECK(run_cli("-q remesh builtin:sphere --res 32 --no-psnr -o '" + (tmp.path / "r2.ply").string() +
+                      "' --exr '" + dir + "'",
+                  err) == 2);
+    CHECK_THAT(read_bytes(err), Catch::Contains("--exr takes a file name prefix") &&
+                                    Catch::Contains("not the directory '" + dir + "'"));
+  }
+  CHECK(!fs::exists(tmp.path / "_32x32.exr"));
+  CHECK(!fs::exists(tmp.path / "r2.ply"));
 }
