@@ -23,8 +23,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 1024));
   app.add_option("--seed", ctx.opts.seed, "Seed for every random choice (results depend only on it)")
       ->check(cli::seed_value);
-  app.add_flag("-q,--quiet", ctx.opts.quiet, "No warnings or progress on stderr");
-  app.add_flag("-v,--verbose", ctx.opts.verbose, "More detail on stderr");
+  CLI::Option* quiet = app.add_flag("-q,--quiet", ctx.opts.quiet, "No warnings or progress on stderr");
+  app.add_flag("-v,--verbose", ctx.opts.verbose, "More detail on stderr")->excludes(quiet);
   app.add_flag("--json", ctx.opts.json, "Print the result as one JSON object on stdout");
   app.add_option("--report", ctx.opts.report, "Also save the JSON result to this file");
   app.add_flag("--no-repair", ctx.opts.no_repair,

@@ -428,6 +428,10 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --signal-use goes with --signal\n"));
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --aspect 2", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect goes with --uv-layout\n"));
+  // Quiet won silently over verbose.
+  CHECK(run_cli("-q -v info builtin:sphere", err) == 2);
+  CHECK_THAT(line(),
+             Catch::Contains("--quiet excludes --verbose") || Catch::Contains("--verbose excludes --quiet"));
   // A UV layout is always drawn at 2x2: --supersample did nothing there, and the size check
   // used it (4096² at --supersample 1 passed, then the mesh was blamed).
   CHECK(
