@@ -531,16 +531,44 @@ void OutputBatch::commit() {
     if (::stat(target.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
       throw InputError(target, "cannot write: Is a directory");
   }
+  // Any other failure (an I/O error, a directory gone) can come midway. The files replaced so
+  // far are then put back: each existing target is first kept under a second name (a hard
+  // link, nothing copied), restored over the new file on failure and unlinked on success.
+  std::vector<std::string> kept(staged_.size());
+  auto drop_kept = [&] {
+    for (const std::string& k : kept)
+      if (!k.empty()) remove_temporary_file(k);
+  };
+  for (std::size_t i = 0; i < staged_.size(); ++i) {
+    const std::string& target = staged_[i].second;
+    const std::string k = temporary_path(target, ".kept");
+    track_temporary_file(k);
+    if (::link(target.c_str(), k.c_str()) == 0)
+      kept[i] = k;
+    else
+      untrack_temporary_file(k);  // no file there yet, or no hard links: nothing to restore
+  }
   for (std::size_t i = 0; i < staged_.size(); ++i) {
     const auto& [tmp, target] = staged_[i];
     if (std::rename(tmp.c_str(), target.c_str()) != 0) {
       const int err = errno;
       const std::string failed = target;
+      for (std::size_t j = 0; j < i; ++j) {
+        const std::string& done = staged_[j].second;
+        if (kept[j].empty()) {
+          std::remove(done.c_str());
+        } else if (std::rename(kept[j].c_str(), done.c_str()) == 0) {
+          untrack_temporary_file(kept[j]);
+          kept[j].clear();
+        }
+      }
+      drop_kept();
       staged_.erase(staged_.begin(), staged_.begin() + static_cast<std::ptrdiff_t>(i));  // the rest: removed
-      throw InputError(failed, std::string("cannot write: ") + std::strerror(err));
+      throw Error(failed + ": cannot write: " + std::strerror(err));
     }
     untrack_temporary_file(tmp);
   }
+  drop_kept();
   staged_.clear();
 }
 

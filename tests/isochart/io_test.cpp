@@ -905,6 +905,19 @@ TEST_CASE("an output batch lands all its files together or none", "[io]") {
   }
   CHECK(d.entries() == std::vector<std::string>{"a.ply", "b.txt", "later.txt", "taken.txt"});
   CHECK(fs::is_empty(d.file("later.txt")));
+  {
+    // A rename failing midway (here: the second output's directory is gone) puts back what
+    // the first ones replaced, and removes what they added; it was left half-done.
+    fs::create_directory(d.file("sub"));
+    OutputBatch batch;
+    write_file_atomic(d.file("b.txt"), "fourth");
+    write_file_atomic(d.file("fresh.txt"), "new");
+    write_file_atomic(d.file("sub/c.txt"), "x");
+    fs::remove_all(d.file("sub"));
+    CHECK_THROWS_WITH(batch.commit(), Catch::Contains("sub/c.txt: cannot write"));
+  }
+  CHECK(read_bytes(d.file("b.txt")) == "second");
+  CHECK(d.entries() == std::vector<std::string>{"a.ply", "b.txt", "later.txt", "taken.txt"});
 }
 
 TEST_CASE("an interrupted run leaves no temporary files", "[io]") {

@@ -133,7 +133,10 @@ class OutputBatch {
   OutputBatch(const OutputBatch&) = delete;
   OutputBatch& operator=(const OutputBatch&) = delete;
   /// Renames every staged file over its target, in the order written.
-  /// 	hrow InputError(target, "cannot write: REASON") if a rename fails (the rest are removed).
+  /// \throw InputError(target, "cannot write: Is a directory") before any rename when a target
+  ///        is a directory; Error("TARGET: cannot write: REASON") if a rename fails midway: the
+  ///        outputs renamed so far get their previous files back (or are removed), the rest
+  ///        are dropped.
   void commit();
   /// Called by the writers: keeps `tmp` for `target` when a batch is open (true), else false.
   static bool stage(const std::string& tmp, const std::string& target);
