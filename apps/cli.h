@@ -92,7 +92,8 @@ inline CLI::Validator number_in(double lo, double hi) {
         // CLI::Range's wording, which Context rewrites for every range alike.
         return "Value " + v + " not in range " + std::to_string(lo) + " to " + std::to_string(hi);
       },
-      "NUMBER");
+      // The help's wording of CLI::Range.
+      "FLOAT in [" + CLI::detail::to_string(lo) + " - " + CLI::detail::to_string(hi) + "]");
 }
 
 /// A seed: 0 .. 2^64 − 1 in decimal. CLI11 would take "-1" or a 30-digit number silently
