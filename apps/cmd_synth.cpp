@@ -52,6 +52,17 @@ std::string stem_of(const std::string& path) {
   return path.substr(0, dot);
 }
 
+// The stem of the PNG textures: the MTL names them in `map_Kd`, which many OBJ readers end at
+// a space (tinyobjloader took "out.png" from "map_Kd my out.png"), so spaces in the file name
+// become underscores, as in the MTL's own name (isochart::save_mesh).
+std::string texture_stem(const std::string& stem) {
+  std::string t = stem;
+  const auto slash = t.find_last_of('/');
+  for (std::size_t i = slash == std::string::npos ? 0 : slash + 1; i < t.size(); ++i)
+    if (t[i] == ' ' || t[i] == '\t') t[i] = '_';
+  return t;
+}
+
 // The extensions of the two meshes written: the one typed keeps its case (`-o a.GLB` wrote
 // a.glb, and the file asked for was not there).
 std::pair<std::string, std::string> mesh_extensions(const std::string& output) {
@@ -71,12 +82,11 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   output_mesh_format(a.output, {isochart::MeshFormat::Glb, isochart::MeshFormat::Obj},
                      ".glb or .obj; both are written, with PNG textures");
   {
-    const std::string stem = stem_of(a.output);
+    const std::string stem = stem_of(a.output), tex = texture_stem(stem);
     const auto [glb, obj] = mesh_extensions(a.output);
     std::vector<std::string> outs;
-    for (const std::string& tail : {glb, obj, std::string(".mtl"), std::string(".png"), "_mcgim" + glb,
-                                    "_mcgim" + obj, std::string("_mcgim.mtl"), std::string("_mcgim.png")})
-      outs.push_back(stem + tail);
+    for (const std::string& tail : {glb, obj, "_mcgim" + glb, "_mcgim" + obj}) outs.push_back(stem + tail);
+    for (const char* tail : {".mtl", ".png", "_mcgim.mtl", "_mcgim.png"}) outs.push_back(tex + tail);
     ctx.check_paths({a.input, a.exemplar}, outs);
   }
   if (!a.direction.empty() && a.direction.size() != 3) bad_option("--direction takes three numbers x,y,z");
@@ -187,7 +197,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   const auto tw = std::chrono::steady_clock::now();
   const std::string stem = stem_of(a.output);
   const auto [glb, obj] = mesh_extensions(a.output);
-  const std::string atlas_png = stem + ".png", gim_png = stem + "_mcgim.png";
+  const std::string atlas_png = texture_stem(stem) + ".png", gim_png = texture_stem(stem) + "_mcgim.png";
   isochart::write_image(atlas_png, atlas_tex);
   isochart::write_image(gim_png, r.texture);
   isochart::SaveOptions so_glb, so_obj;
@@ -242,8 +252,8 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   else
     t << r.seam_error;
   t << ", match error " << r.match_error << ", texel-scale spread " << r.texel_scale_spread << "\n  wrote "
-    << stem << glb << "/" << obj << "/.png and " << stem << "_mcgim" << glb << "/" << obj << "/.png in "
-    << j["seconds"].get<double>() << " s\n";
+    << stem << glb << "/" << obj << " with " << atlas_png << " and " << stem << "_mcgim" << glb << "/" << obj
+    << " with " << gim_png << " in " << j["seconds"].get<double>() << " s\n";
   ctx.emit(j, t.str());
 }
 

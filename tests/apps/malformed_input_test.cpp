@@ -830,6 +830,26 @@ TEST_CASE("comma lists refuse empty items and repeats alike", "[cli]") {
   CHECK(std::distance(fs::directory_iterator(tmp.path), fs::directory_iterator()) == 1);  // err.txt
 }
 
+TEST_CASE("synth's textures are named without spaces, so MTL readers find them", "[cli]") {
+  // map_Kd "my out.png" read as "out.png" in readers that end the name at a space.
+  TempDir tmp("space names");
+  const fs::path err = tmp.path / "err.txt";
+  REQUIRE(run_cli("-q synth builtin:sphere --levels 32,16 --atlas-size 32 -o '" +
+                      (tmp.path / "my out.obj").string() + "'",
+                  err) == 0);
+  for (const char* mtl : {"my_out.mtl", "my_out_mcgim.mtl"}) {
+    INFO(mtl);
+    const std::string text = read_bytes(tmp.path / mtl);
+    const auto at = text.find("map_Kd ");
+    REQUIRE(at != std::string::npos);
+    const std::string png = text.substr(at + 7, text.find('\n', at) - at - 7);
+    CHECK(png.find(' ') == std::string::npos);
+    CHECK(fs::exists(tmp.path / png));
+  }
+  CHECK(fs::exists(tmp.path / "my out.glb"));
+  CHECK(fs::exists(tmp.path / "my out_mcgim.obj"));
+}
+
 TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
   // Faces without vt read the texel at (0, 0): half the surface got a made-up signal.
   TempDir tmp("signal_uvs");
