@@ -3,6 +3,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
@@ -67,6 +68,52 @@ void check_annulus(const Level& lv) {
   CHECK(t.nonmanifold_edges == 0);
   CHECK(t.nonmanifold_vertices == 0);
   CHECK(t.euler_characteristic == 0);
+}
+
+// A flat dumbbell, one chart laid out as itself: two squares (x in [0.1, 0.4] and [0.6, 0.9],
+// y in [0.1, 0.4]) joined by a neck (y in [0.245, 0.255]) a third of a texel wide at 32². The
+// cells inside `hole` (x0, x1, y0, y1), when given, are left out.
+isochart::Mesh dumbbell_atlas(const std::array<double, 4>* hole = nullptr) {
+  std::vector<double> xs, ys;
+  for (double x = 0.1; x < 0.9001; x += 0.05) xs.push_back(x);
+  for (double y = 0.1; y < 0.4001; y += 0.05) ys.push_back(y);
+  ys.push_back(0.245);
+  ys.push_back(0.255);
+  std::sort(ys.begin(), ys.end());
+  auto inside = [hole](double x, double y) {
+    const bool squares = y >= 0.1 - 1e-9 && y <= 0.4 + 1e-9 && (x <= 0.4 + 1e-9 || x >= 0.6 - 1e-9);
+    const bool cut = hole && x > (*hole)[0] && x < (*hole)[1] && y > (*hole)[2] && y < (*hole)[3];
+    return (squares || (y >= 0.245 - 1e-9 && y <= 0.255 + 1e-9)) && !cut;
+  };
+  isochart::Mesh m;
+  std::map<std::pair<int, int>, int> ids;
+  auto vid = [&](int i, int j) {
+    auto it = ids.find({i, j});
+    if (it != ids.end()) return it->second;
+    m.positions.push_back({xs[i], ys[j], 0.0});
+    ids[{i, j}] = m.num_vertices() - 1;
+    return m.num_vertices() - 1;
+  };
+  for (std::size_t j = 0; j + 1 < ys.size(); ++j)
+    for (std::size_t i = 0; i + 1 < xs.size(); ++i) {
+      if (!inside(0.5 * (xs[i] + xs[i + 1]), 0.5 * (ys[j] + ys[j + 1]))) continue;
+      const int I = static_cast<int>(i), J = static_cast<int>(j);
+      const int a = vid(I, J), b = vid(I + 1, J), c = vid(I + 1, J + 1), d = vid(I, J + 1);
+      m.faces.push_back({a, b, c});
+      m.faces.push_back({a, c, d});
+    }
+  for (const auto& p : m.positions) m.uvs.push_back({p.x, p.y});
+  m.face_uvs = m.faces;
+  m.face_groups.assign(m.faces.size(), 0);
+  return m;
+}
+
+// Defined samples left and right of the dumbbell's neck.
+std::pair<int, int> dumbbell_sides(const Level& lv) {
+  int left = 0, right = 0;
+  for (std::size_t i = 0; i < lv.image.chart.size(); ++i)
+    if (lv.image.chart[i] >= 0) (lv.image.positions[i].x < 0.5 ? left : right) += 1;
+  return {left, right};
 }
 
 }  // namespace
@@ -489,36 +536,7 @@ TEST_CASE("sample centres on shared edges and vertices are defined once, without
 }
 
 TEST_CASE("a chart part behind a neck thinner than a sample is kept", "[mcgim]") {
-  // A flat dumbbell, one chart: two squares joined by a neck a third of a texel wide at 32².
-  std::vector<double> xs, ys;
-  for (double x = 0.1; x < 0.9001; x += 0.05) xs.push_back(x);
-  for (double y = 0.1; y < 0.4001; y += 0.05) ys.push_back(y);
-  ys.push_back(0.245);
-  ys.push_back(0.255);
-  std::sort(ys.begin(), ys.end());
-  auto inside = [](double x, double y) {
-    const bool squares = y >= 0.1 - 1e-9 && y <= 0.4 + 1e-9 && (x <= 0.4 + 1e-9 || x >= 0.6 - 1e-9);
-    return squares || (y >= 0.245 - 1e-9 && y <= 0.255 + 1e-9);
-  };
-  isochart::Mesh m;
-  std::map<std::pair<int, int>, int> ids;
-  auto vid = [&](int i, int j) {
-    auto it = ids.find({i, j});
-    if (it != ids.end()) return it->second;
-    m.positions.push_back({xs[i], ys[j], 0.0});
-    ids[{i, j}] = m.num_vertices() - 1;
-    return m.num_vertices() - 1;
-  };
-  for (std::size_t j = 0; j + 1 < ys.size(); ++j)
-    for (std::size_t i = 0; i + 1 < xs.size(); ++i) {
-      if (!inside(0.5 * (xs[i] + xs[i + 1]), 0.5 * (ys[j] + ys[j + 1]))) continue;
-      const int a = vid(i, j), b = vid(i + 1, j), c = vid(i + 1, j + 1), d = vid(i, j + 1);
-      m.faces.push_back({a, b, c});
-      m.faces.push_back({a, c, d});
-    }
-  for (const auto& p : m.positions) m.uvs.push_back({p.x, p.y});
-  m.face_uvs = m.faces;
-  m.face_groups.assign(m.faces.size(), 0);
+  const isochart::Mesh m = dumbbell_atlas();
   const Level lv = build_level(m, keep_layout(32, false));
   // Each square covers about 9.6² sample centres; losing one would leave about 90.
   CHECK(lv.stats.defined_samples > 150);
@@ -526,17 +544,13 @@ TEST_CASE("a chart part behind a neck thinner than a sample is kept", "[mcgim]")
   CHECK(lv.stats.topology.euler_characteristic == 1);
   CHECK(lv.stats.topology.manifold());
   // Both squares are there: samples on the left and on the right of the neck.
-  int left = 0, right = 0;
-  for (std::size_t i = 0; i < lv.image.chart.size(); ++i) {
-    if (lv.image.chart[i] < 0) continue;
-    (lv.image.positions[i].x < 0.5 ? left : right) += 1;
-  }
+  const auto [left, right] = dumbbell_sides(lv);
   CHECK(left > 70);
   CHECK(right > 70);
 }
 
 TEST_CASE("a chart with a slit hole and a thin neck keeps its slit open", "[mcgim]") {
-  // The dumbbell above with a hole in its left square, which the sampler opens by a slit to
+  // The dumbbell with a hole in its left square, which the sampler opens by a slit to
   // the nearest side (an atlas's own zero-width slit joins up again). The neck makes the
   // sampler try the chart again with the texels it touches. That retry must neither put a
   // sample inside the hole (a hole under two texels wide has texels its triangles touch: it
@@ -544,45 +558,13 @@ TEST_CASE("a chart with a slit hole and a thin neck keeps its slit open", "[mcgi
   // the chart is cut open elsewhere: 0.055 from the surface).
   for (int variant = 0; variant < 2; ++variant) {
     INFO((variant == 0 ? "hole by the top side" : "hole in the middle"));
-    std::vector<double> xs, ys;
-    for (double x = 0.1; x < 0.9001; x += 0.05) xs.push_back(x);
-    for (double y = 0.1; y < 0.4001; y += 0.05) ys.push_back(y);
-    ys.push_back(0.245);
-    ys.push_back(0.255);
-    std::sort(ys.begin(), ys.end());
-    auto inside = [variant](double x, double y) {
-      const bool squares = y >= 0.1 - 1e-9 && y <= 0.4 + 1e-9 && (x <= 0.4 + 1e-9 || x >= 0.6 - 1e-9);
-      const bool hole = variant == 0 ? x > 0.25 && x < 0.3 && y > 0.3 && y < 0.35
-                                     : x > 0.2 && x < 0.25 && y > 0.255 && y < 0.3;
-      return (squares || (y >= 0.245 - 1e-9 && y <= 0.255 + 1e-9)) && !hole;
-    };
-    isochart::Mesh m;
-    std::map<std::pair<int, int>, int> ids;
-    auto vid = [&](int i, int j) {
-      auto it = ids.find({i, j});
-      if (it != ids.end()) return it->second;
-      m.positions.push_back({xs[i], ys[j], 0.0});
-      ids[{i, j}] = m.num_vertices() - 1;
-      return m.num_vertices() - 1;
-    };
-    for (std::size_t j = 0; j + 1 < ys.size(); ++j)
-      for (std::size_t i = 0; i + 1 < xs.size(); ++i) {
-        if (!inside(0.5 * (xs[i] + xs[i + 1]), 0.5 * (ys[j] + ys[j + 1]))) continue;
-        const int I = static_cast<int>(i), J = static_cast<int>(j);
-        m.faces.push_back({vid(I, J), vid(I + 1, J), vid(I + 1, J + 1)});
-        m.faces.push_back({vid(I, J), vid(I + 1, J + 1), vid(I, J + 1)});
-      }
-    for (const auto& p : m.positions) m.uvs.push_back({p.x, p.y});
-    m.face_uvs = m.faces;
-    m.face_groups.assign(m.faces.size(), 0);
+    const std::array<double, 4> hole = variant == 0 ? std::array<double, 4>{0.25, 0.3, 0.3, 0.35}
+                                                    : std::array<double, 4>{0.2, 0.25, 0.255, 0.3};
+    const isochart::Mesh m = dumbbell_atlas(&hole);
     const int res = 32;
     const Level lv = build_level(m, keep_layout(res, false));
     check_annulus(lv);
-    int left = 0, right = 0;
-    for (std::size_t i = 0; i < lv.image.chart.size(); ++i) {
-      if (lv.image.chart[i] < 0) continue;
-      (lv.image.positions[i].x < 0.5 ? left : right) += 1;
-    }
+    const auto [left, right] = dumbbell_sides(lv);
     CHECK(left > 50);
     CHECK(right > 70);
     DistanceOptions d;
