@@ -79,6 +79,19 @@ inline const CLI::Validator positive{
     },
     "POSITIVE"};
 
+/// A finite number >= 0.
+inline const CLI::Validator non_negative{[](std::string& v) {
+                                           try {
+                                             std::size_t used = 0;
+                                             const double x = std::stod(v, &used);
+                                             if (used == v.size() && x >= 0 && x <= 1e300)
+                                               return std::string();
+                                           } catch (const std::exception&) {
+                                           }
+                                           return "expected a number >= 0, got '" + v + "'";
+                                         },
+                                         "NON-NEGATIVE"};
+
 /// A number in [lo, hi]. CLI::Range compares with < and >, so "nan" passed it.
 inline CLI::Validator number_in(double lo, double hi) {
   return CLI::Validator(

@@ -255,11 +255,15 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
                   "full: signal charts and parameterization")
       ->capture_default_str();
   sub->add_option("--beta", args->signal_options.beta, "Eq. 6 weight of geodesic vs. signal distance")
+      ->check(number_in(0.0, 1.0))
       ->capture_default_str();
-  sub->add_option("--lambda", args->signal_options.lambda, "Weight of the signal against the geometry in the metric")
+  sub->add_option("--lambda", args->signal_options.lambda,
+                  "Weight of the signal against the geometry in the metric")
+      ->check(non_negative)
       ->capture_default_str();
   sub->add_option("--chart-lambda", args->signal_options.chart_lambda,
                   "Signal weight of the metric that splits and merges charts (0 = --lambda)")
+      ->check(non_negative)
       ->capture_default_str();
   sub->add_option(
          "--split-efficiency", args->signal_options.split_efficiency,

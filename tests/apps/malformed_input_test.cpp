@@ -753,6 +753,11 @@ TEST_CASE("atlas says when the bounds need more charts than --max-charts, and ch
   CHECK_THAT(read_bytes(err), !Catch::Contains("--max-charts"));
   CHECK(run_cli("atlas builtin:sphere --signal normals --split-efficiency 5" + out, err) == 2);
   CHECK_THAT(read_bytes(err), Catch::Contains("--split-efficiency: expected a number from 0 to 1"));
+  // Refused when parsed, not after the signal was built, and not blamed on the mesh file.
+  CHECK(run_cli("atlas builtin:sphere --signal normals --beta 2" + out, err) == 2);
+  CHECK(read_bytes(err) == "isocharts: error: --beta: expected a number from 0 to 1, got '2'\n");
+  CHECK(run_cli("atlas builtin:sphere --signal normals --lambda -1" + out, err) == 2);
+  CHECK(read_bytes(err) == "isocharts: error: --lambda: expected a number >= 0, got '-1'\n");
   // sae's limit: 16384² took 6.3 GB after the whole atlas was built.
   CHECK(run_cli("atlas builtin:sphere --signal normals --sae-res 16384" + out, err) == 2);
   CHECK_THAT(read_bytes(err), Catch::Contains("--sae-res: expected an integer from 1 to 8192"));
