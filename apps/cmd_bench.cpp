@@ -47,6 +47,7 @@ struct BenchArgs {
   int res = 256;
   std::string out = "bench_out";
   std::string data = "../shared/data";
+  bool data_given = false;
   double max_l2 = 1.1;
   double max_linf = 5.0;
   int pack_res = 512;
@@ -307,8 +308,7 @@ class Bench {
   }
 
   // Runs every method on one mesh; appends rows.
-  void run_mesh(const std::string& path, int& k, int n) {
-    const isochart::Mesh mesh = load_any(ctx_, path);
+  void run_mesh(const std::string& path, const isochart::Mesh& mesh, int& k, int n) {
     const isochart::Topology topo(mesh);
     const std::string name = stem(path);
     const bool closed = topo.boundary_loops().empty();
@@ -751,13 +751,34 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   if (!(a.max_linf >= 1.0)) bad_option("--max-linf must be at least 1");
   if (!sweep_text.empty()) a.sweep = sweep_text == "none" ? std::vector<double>{} : parse_list(sweep_text);
   const std::vector<Method> methods = parse_methods_impl(a.methods);
-  if (a.meshes.empty()) a.meshes = default_meshes(a.data);
-  for (const auto& m : a.meshes)
-    if (m.rfind("builtin:", 0) != 0 && !file_exists(m)) throw isochart::InputError(m, "no such file");
+  {
+    // A mistyped --data would otherwise bench the built-in meshes without a word.
+    std::error_code ec;
+    if (a.data_given && !fs::is_directory(a.data, ec))
+      throw isochart::InputError(a.data, "--data: no such directory");
+  }
+  if (a.meshes.empty()) {
+    a.meshes = default_meshes(a.data);
+    if (a.meshes.front().rfind("builtin:", 0) == 0)
+      ctx.warn(a.data, "no meshes/ with meshes in it: benchmarking the built-in meshes");
+  }
+  // Rows, tables and plots are keyed by the mesh's file stem.
+  for (std::size_t i = 0; i < a.meshes.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (stem(a.meshes[i]) == stem(a.meshes[j]))
+        bad_option("meshes " + a.meshes[j] + " and " + a.meshes[i] + " are both named '" + stem(a.meshes[i]) +
+                   "' in the tables; give them different file names");
+  // Every mesh is read before any work: one unreadable file found hours in threw every finished
+  // row away.
+  std::vector<isochart::Mesh> meshes;
+  for (const auto& m : a.meshes) meshes.push_back(load_any(ctx, m));
   {
     std::error_code ec;
     fs::create_directories(a.out, ec);
     if (!fs::is_directory(a.out, ec)) throw isochart::InputError(a.out, "cannot create the output directory");
+    const fs::path out(a.out);
+    ctx.check_paths(
+        {}, {(out / "bench.md").string(), (out / "bench.csv").string(), (out / "sweep.csv").string()});
   }
 
   Bench bench(ctx, a, methods);
@@ -772,7 +793,7 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
         const int found = static_cast<int>(auto_externals(a.data, stem(m)).size());
         n += methods.size() > 1 ? found : std::max(1, found);
       }
-  for (const auto& m : a.meshes) bench.run_mesh(m, k, n);
+  for (std::size_t i = 0; i < a.meshes.size(); ++i) bench.run_mesh(a.meshes[i], meshes[i], k, n);
 
   const std::string md = to_markdown(bench.rows(), bench.sweep_points(), a);
   const fs::path out(a.out);
@@ -865,7 +886,10 @@ void add_bench(CLI::App& app, Context& ctx, Action& action) {
       "  isocharts bench builtin:torus --methods isochart,lscm --res 128 --out /tmp/b\n"
       "  isocharts bench ../shared/data/meshes/bunny.obj --methods "
       "isochart,external:../shared/data/baseline_atlases/bunny_xatlas.obj");
-  sub->callback([&ctx, args, sweep, &action] { action = [&ctx, args, sweep] { run_bench(ctx, *args, *sweep); }; });
+  sub->callback([&ctx, args, sweep, sub, &action] {
+    args->data_given = sub->count("--data") > 0;
+    action = [&ctx, args, sweep] { run_bench(ctx, *args, *sweep); };
+  });
 }
 
 }  // namespace cli

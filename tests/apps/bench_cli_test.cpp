@@ -190,6 +190,9 @@ TEST_CASE("bench: bad inputs are one line and exit code 2", "[bench]") {
   const fs::path dir = fresh_dir("bad");
   const fs::path err = dir / "stderr.txt";
   const std::string out = " --out '" + (dir / "out").string() + "'";
+  const fs::path bad = dir / "bad.obj";
+  std::ofstream(bad) << "v 0 0 0\nv 1 0 0\nf 1 2 9\n";
+  std::ofstream(dir / "sphere.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
   struct Case {
     std::string args, expect;
   };
@@ -201,6 +204,15 @@ TEST_CASE("bench: bad inputs are one line and exit code 2", "[bench]") {
            {"bench builtin:sphere --res 3", "--res must be between 8 and 2048"},
            {"bench builtin:sphere --res 4096", "--res must be between 8 and 2048"},
            {"bench builtin:sphere --sweep 1.1,abc", "--sweep: 'abc'"},
+           // Found before any work, and before the output directory is made: an unreadable
+           // mesh found after the others threw their rows away, a mistyped --data benched the
+           // built-in meshes, and two meshes of one name were merged in the tables.
+           {"bench builtin:sphere '" + bad.string() + "' --methods lscm --sweep none",
+            "line 3: vertex index 9 is out of range"},
+           {"bench --methods lscm --data /nonexistent/data --sweep none",
+            "/nonexistent/data: --data: no such directory"},
+           {"bench builtin:sphere '" + (dir / "sphere.obj").string() + "' --methods lscm",
+            "are both named 'sphere'"},
        }) {
     INFO(c.args);
     CHECK(run_cli(c.args + out, err) == 2);
@@ -209,6 +221,7 @@ TEST_CASE("bench: bad inputs are one line and exit code 2", "[bench]") {
     CHECK(e.rfind("isocharts: error: ", 0) == 0);
     CHECK(e.find(c.expect) != std::string::npos);
   }
+  CHECK(!fs::exists(dir / "out"));
 }
 
 TEST_CASE("bench: equal PSNR is a tie, not a win for lscm", "[bench]") {
