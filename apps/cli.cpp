@@ -286,4 +286,17 @@ std::vector<int> parse_levels(const std::vector<std::string>& given, int lo, int
   return levels;
 }
 
+void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atlas, const std::string& file) {
+  const isochart::BoundingBox bi = isochart::bounding_box(input), ba = isochart::bounding_box(atlas);
+  const double diag = bi.diagonal();
+  const double off = std::max(isochart::norm(ba.min - bi.min), isochart::norm(ba.max - bi.max));
+  const double ai = isochart::surface_area(input), aa = isochart::surface_area(atlas);
+  if (!(off <= 1e-3 * diag) || !(std::abs(aa - ai) <= 0.01 * ai)) {
+    std::ostringstream msg;
+    msg << "the atlas is not of the input mesh (bounding boxes " << off / diag * 100
+        << " % of the diagonal apart, areas " << aa << " and " << ai << ")";
+    throw isochart::InputError(file, msg.str());
+  }
+}
+
 }  // namespace cli

@@ -158,6 +158,12 @@ isochart::MeshFormat output_mesh_format(const std::string& path,
                                         const std::vector<isochart::MeshFormat>& allowed,
                                         const std::string& writes);
 
+/// An external atlas must lay out the input's surface (its own vertices and faces may be split
+/// or renumbered): the same bounding box within 0.1 % of its diagonal and the same area within
+/// 1 %. Otherwise its remesh would be of another mesh, measured against this one.
+/// \throw InputError(file, ...) when it does not.
+void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atlas, const std::string& file);
+
 /// The items of a comma-separated option value. An empty item ("64,,32", a trailing comma) is
 /// refused: CLI11's own splitting dropped them silently.
 std::vector<std::string> split_items(const std::string& option, const std::string& text);

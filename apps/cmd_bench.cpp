@@ -349,6 +349,8 @@ class Bench {
             if (b.geometry.num_faces() != mesh.num_faces())
               throw isochart::InputError("", "the atlas has " + std::to_string(b.geometry.num_faces()) +
                                                  " faces, the mesh " + std::to_string(mesh.num_faces()));
+            // Its remesh is measured against its own geometry: that must be this mesh's.
+            check_atlas_matches(mesh, b.geometry, "");
           } else {
             b = build(mesh, meth.kind, a_.max_l2, meth.kind == Kind::LscmStretch ? lscm_cache.get() : nullptr);
             if (meth.kind == Kind::Lscm) lscm_cache = std::make_unique<isochart::Atlas>(b.atlas);

@@ -80,22 +80,6 @@ isochart::LoadResult load_any(const Context& ctx, const std::string& path, bool 
   return ctx.load(path, atlas);
 }
 
-// An external atlas must lay out the input's surface (its own vertices and faces may be split
-// or renumbered): the same bounding box within 0.1 % of its diagonal and the same area within
-// 1 %. Otherwise the remesh would be of another mesh, measured against this one.
-void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atlas, const std::string& file) {
-  const isochart::BoundingBox bi = isochart::bounding_box(input), ba = isochart::bounding_box(atlas);
-  const double diag = bi.diagonal();
-  const double off = std::max(isochart::norm(ba.min - bi.min), isochart::norm(ba.max - bi.max));
-  const double ai = isochart::surface_area(input), aa = isochart::surface_area(atlas);
-  if (!(off <= 1e-3 * diag) || !(std::abs(aa - ai) <= 0.01 * ai)) {
-    std::ostringstream msg;
-    msg << "the atlas is not of the input mesh (bounding boxes " << off / diag * 100
-        << " % of the diagonal apart, areas " << aa << " and " << ai << ")";
-    throw isochart::InputError(file, msg.str());
-  }
-}
-
 void run_remesh(const Context& ctx, const RemeshArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   const int modes = (a.res > 0) + (a.samples > 0) + (a.width > 0 || a.height > 0) + !a.levels.empty();

@@ -172,6 +172,26 @@ TEST_CASE("bench: an external atlas the sampler rejects is an n/a row, not an ab
   CHECK(rows[1].at("psnr_db").empty());
 }
 
+TEST_CASE("bench: an external atlas of another surface is an n/a row", "[bench]") {
+  // Moved by half its size: the same face count, so it was benched, and its remesh measured
+  // against its own geometry scored like an atlas of this mesh.
+  const fs::path dir = fresh_dir("moved_atlas");
+  const fs::path mesh = dir / "quad.obj", moved = dir / "moved.obj", out = dir / "out",
+                 err = dir / "stderr.txt";
+  std::ofstream(mesh) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
+  std::ofstream(moved)
+      << "v 0.5 0 0\nv 1.5 0 0\nv 1.5 1 0\nv 0.5 1 0\nvt 0.1 0.1\nvt 0.9 0.1\nvt 0.9 0.9\nvt 0.1 "
+         "0.9\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+  REQUIRE(run_cli("bench '" + mesh.string() + "' --methods isochart,external:'" + moved.string() +
+                      "' --res 16 --psnr-samples 2000 --sweep none --no-plots --out '" + out.string() + "'",
+                  err) == 0);
+  const auto rows = read_csv(out / "bench.csv");
+  REQUIRE(rows.size() == 2);
+  CHECK(rows[1].at("method") == "external:moved");
+  CHECK(rows[1].at("note").rfind("n/a: the atlas is not of the input mesh", 0) == 0);
+  CHECK(rows[1].at("psnr_db").empty());
+}
+
 TEST_CASE("bench: only external methods and no baseline atlas for the mesh: an n/a row saying so", "[bench]") {
   const fs::path dir = fresh_dir("no_baseline");
   const fs::path out = dir / "out", err = dir / "stderr.txt";
