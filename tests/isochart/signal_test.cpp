@@ -364,6 +364,32 @@ TEST_CASE("signal atlases keep the geometric guarantees and lower the signal err
   CHECK(sae[2] < sae[0]);
 }
 
+TEST_CASE("signal atlases in a non-square texture are optimized and measured in texels", "[signal]") {
+  // The packed coordinates of a 2048×128 atlas were taken as the charts' own: every chart was
+  // re-optimized 16 times flattened (L2 4.2 and Linf 10.7 at 32:1 against 1.04 and 1.9 in a
+  // square), and the signal stretch was measured on the squashed layout.
+  const Mesh m = striped_face();
+  const Signal s = make_signal(m, "colors");
+  SignalAtlasOptions so;
+  so.use = SignalUse::Param;
+  AtlasOptions o;
+  o.seed = 3;
+  o.pack.width = o.pack.height = 512;
+  SignalAtlasStats square;
+  const Atlas a = build_signal_atlas(m, s, o, so, &square);
+  o.pack.width = 2048;
+  o.pack.height = 128;
+  SignalAtlasStats wide;
+  const Atlas b = build_signal_atlas(m, s, o, so, &wide);
+  CHECK(b.stats.l2 <= so.max_geometric_l2);
+  CHECK(b.stats.linf <= o.max_linf);
+  CHECK(b.stats.l2 == Approx(a.stats.l2).epsilon(0.05));
+  CHECK(wide.signal_stretch == Approx(square.signal_stretch).epsilon(0.05));
+  REQUIRE(a.charts.size() == b.charts.size());
+  for (std::size_t c = 0; c < a.charts.size(); ++c)
+    CHECK(b.charts[c].l2 == Approx(a.charts[c].l2).epsilon(0.05));
+}
+
 TEST_CASE("signal atlases are identical for one and two threads", "[signal]") {
   const Mesh m = striped_face();
   const Signal s = make_signal(m, "colors");
