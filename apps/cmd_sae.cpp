@@ -100,7 +100,10 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   isochart::Image baked;
   const isochart::SaeResult r = isochart::signal_approximation_error(mesh, signal, width, height, &baked);
   const std::vector<isochart::Imt> imt = isochart::face_imt(mesh, signal);
-  const double sst = isochart::signal_stretch(mesh, imt);
+  // Measured in texels: a unit of u is width / height units of v.
+  isochart::Mesh in_texels = mesh;
+  for (isochart::Vec2d& uv : in_texels.uvs) uv.x *= static_cast<double>(width) / height;
+  const double sst = isochart::signal_stretch(in_texels, imt);
   if (!a.texture_out.empty()) isochart::write_image(a.texture_out, displayable(baked, a.signal == "normals"));
   if (!a.imt_out.empty()) isochart::write_imt(a.imt_out, imt);
 

@@ -426,6 +426,26 @@ TEST_CASE("isocharts sae reports the field sae", "[signal]") {
   ss << in.rdbuf();
   const std::string json = ss.str();
   CHECK(json.find("\"sae\":") != std::string::npos);
+  // The signal stretch is measured in texels of the texture named: the same atlas, packed for
+  // 512×64, read as square gave 2.1 where it is 1.0.
+  auto stretch = [&](const std::string& size) {
+    const std::string c = "\"" + std::string(ISOCHARTS_CLI) + "\" -q --json sae " + dir +
+                          "/wide.obj --signal normals " + size + " > " + dir + "/wide.json";
+    REQUIRE(std::system(c.c_str()) == 0);
+    std::ifstream f(dir + "/wide.json");
+    std::stringstream t;
+    t << f.rdbuf();
+    const std::string text = t.str();
+    const auto at = text.find("\"signal_stretch\":");
+    REQUIRE(at != std::string::npos);
+    return std::stod(text.substr(at + 17));
+  };
+  cmd = "\"" + std::string(ISOCHARTS_CLI) + "\" -q atlas builtin:face -o " + dir +
+        "/wide.obj --width 512 --height 64 > /dev/null";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  const double in_texels = stretch("--width 512 --height 64"), squashed = stretch("--res 512");
+  CHECK(in_texels < 1.5);
+  CHECK(squashed > 1.5);
   // An atlas without UVs is refused with exit code 2.
   cmd = "\"" + std::string(ISOCHARTS_CLI) + "\" -q sae builtin:sphere --signal normals 2>/dev/null";
   const int rc = std::system(cmd.c_str());
