@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <sstream>
 
 #include "io_internal.h"
 #include "isochart/error.h"
@@ -440,6 +441,23 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
     }
   }
   if (vertex_uv && !corner_uv) raw.polygon_uvs = raw.polygons;
+  // Float colours are meant to be in [0, 1], but some writers store 8-bit values as floats.
+  // Taken as they are, the signal was 255 times too strong and a written PLY saturated.
+  bool float_colors = false;
+  for (const auto& p : vertex_el->props)
+    float_colors |= (p.role == Role::R || p.role == Role::G || p.role == Role::B) && p.type != Type::U8 &&
+                    p.type != Type::U16;
+  if (colors && float_colors) {
+    double top = 0;
+    for (const Vec3d& c : raw.colors) top = std::max({top, c.x, c.y, c.z});
+    std::ostringstream reach;
+    reach << "float vertex colours reach " << top;
+    if (top > 255) throw InputError(path, reach.str() + ", beyond both [0, 1] and the 8-bit range");
+    if (top > 1) {
+      for (Vec3d& c : raw.colors) c = c / 255.0;
+      raw.warnings.push_back(reach.str() + ": read as 8-bit values (0..255) and scaled to [0, 1]");
+    }
+  }
   return raw;
 }
 

@@ -479,6 +479,28 @@ TEST_CASE("PLY: per-vertex texture coordinates and the vertex_index name", "[io]
   CHECK(raw.uvs[raw.polygon_uvs[0][1]] == Vec2d{1, 0});
 }
 
+TEST_CASE("PLY: float colours stored as 0..255 are scaled, with a warning", "[io]") {
+  // Read as they were, the colour signal was 255 times too strong and a written PLY saturated.
+  TempDir d;
+  auto ply = [](const std::string& body) {
+    return "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+           "property float red\nproperty float green\nproperty float blue\nelement face 1\n"
+           "property list uchar int vertex_indices\nend_header\n" +
+           body + "3 0 1 2\n";
+  };
+  const RawMesh byte = read_raw_mesh(d.write("b.ply", ply("0 0 0 255 0 0\n1 0 0 0 51 0\n0 1 0 0 0 0\n")));
+  REQUIRE(byte.colors.size() == 3);
+  CHECK(byte.colors[0].x == Approx(1.0));
+  CHECK(byte.colors[1].y == Approx(0.2));
+  REQUIRE(byte.warnings.size() == 1);
+  CHECK_THAT(byte.warnings[0], Catch::Contains("float vertex colours reach 255: read as 8-bit values"));
+  const RawMesh unit = read_raw_mesh(d.write("u.ply", ply("0 0 0 1 0 0\n1 0 0 0 0.2 0\n0 1 0 0 0 0\n")));
+  CHECK(unit.colors[1].y == Approx(0.2));
+  CHECK(unit.warnings.empty());
+  CHECK_THAT(load_error(d.write("h.ply", ply("0 0 0 300 0 0\n1 0 0 0 0 0\n0 1 0 0 0 0\n"))),
+             Catch::Contains("float vertex colours reach 300, beyond both [0, 1] and the 8-bit range"));
+}
+
 TEST_CASE("PLY: errors name the line or the element", "[io]") {
   TempDir d;
   const std::string full = ply_tetra("binary_little_endian");
