@@ -172,6 +172,37 @@ TEST_CASE("bench: an external atlas the sampler rejects is an n/a row, not an ab
   CHECK(rows[1].at("psnr_db").empty());
 }
 
+TEST_CASE("bench: a row whose samples miss the first method's by more than 2% says so", "[bench]") {
+  // A 10×10 grid without its centre 2×2 cells: lscm's best size holds 4.3 % more samples than
+  // isochart's 24², and the row had no note.
+  const fs::path dir = fresh_dir("ring");
+  const fs::path mesh = dir / "ring.obj", out = dir / "out", err = dir / "stderr.txt";
+  {
+    std::ofstream f(mesh);
+    const int n = 10;
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) f << "v " << double(i) / n << " " << double(j) / n << " 0\n";
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        if (i >= 3 && i <= 6 && j >= 3 && j <= 6) continue;
+        const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;
+        f << "f " << a << " " << b << " " << c << "\nf " << a << " " << c << " " << d << "\n";
+      }
+  }
+  REQUIRE(run_cli("bench '" + mesh.string() +
+                      "' --methods isochart,lscm --res 24 --psnr-samples 2000 --sweep none "
+                      "--no-plots --out '" +
+                      out.string() + "'",
+                  err) == 0);
+  const auto rows = read_csv(out / "bench.csv");
+  REQUIRE(rows.size() == 2);
+  for (const auto& r : rows) {
+    INFO(r.at("method") << " " << r.at("defined_diff_percent") << " " << r.at("note"));
+    const bool off = std::abs(std::stod(r.at("defined_diff_percent"))) > 2;
+    CHECK(off == (r.at("note").find("% off the first method's") != std::string::npos));
+  }
+}
+
 TEST_CASE("bench: an external atlas of another surface is an n/a row", "[bench]") {
   // Moved by half its size: the same face count, so it was benched, and its remesh measured
   // against its own geometry scored like an atlas of this mesh.
