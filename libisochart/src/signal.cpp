@@ -87,7 +87,7 @@ void Signal::evaluate(const Mesh& mesh, int f, double b1, double b2, double* out
     const Face& t = face_uvs[f];
     const Vec2d uv = uvs[t[0]] * b0 + uvs[t[1]] * b1 + uvs[t[2]] * b2;
     float tmp[16];
-    sample_bilinear(texture, uv.x, uv.y, tmp, Wrap::Clamp);
+    sample_bilinear(texture, uv.x, uv.y, tmp, tiling ? Wrap::Repeat : Wrap::Clamp);
     for (int c = 0; c < dimension; ++c) out[c] = tmp[c];
     return;
   }
@@ -127,6 +127,7 @@ Signal make_signal(const Mesh& mesh, const std::string& spec, const std::string&
     if (s.dimension > 16) throw InputError(path, "image has more than 16 channels");
     s.uvs = mesh.uvs;
     s.face_uvs = mesh.face_uvs;
+    for (const Vec2d& uv : s.uvs) s.tiling = s.tiling || uv.x < 0 || uv.x > 1 || uv.y < 0 || uv.y > 1;
   } else {
     throw InputError(file, "unknown --signal '" + spec + "' (expected normals, colors or texture:IMG)");
   }

@@ -453,6 +453,31 @@ TEST_CASE("isocharts sae reports the field sae", "[signal]") {
   std::filesystem::remove_all(tmp);
 }
 
+TEST_CASE("a texture signal repeats where the texture coordinates leave the unit square", "[signal]") {
+  // As render and the glTF sampler read the mesh; the signal clamped instead, so atlases were
+  // optimized for, and sae scored, another signal than the one the mesh shows.
+  const std::string png =
+      (std::filesystem::temp_directory_path() / ("isocharts_tiling_" + std::to_string(::getpid()) + ".png"))
+          .string();
+  Image img(4, 1, 3, 0.0f);
+  for (int x = 0; x < 4; ++x) img.at(x, 0, 0) = x < 2 ? 1.0f : 0.0f;  // red on the left half
+  write_image(png, img);
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.faces = {{0, 1, 2}};
+  m.face_uvs = m.faces;
+  m.uvs = {{0, 0}, {1, 0}, {0, 1}};
+  double v[3];
+  const Signal inside = make_signal(m, "texture:" + png);
+  CHECK_FALSE(inside.tiling);
+  m.uvs = {{1, 0}, {2, 0}, {1, 1}};  // the same triangle one tile to the right
+  const Signal tiled = make_signal(m, "texture:" + png);
+  CHECK(tiled.tiling);
+  tiled.evaluate(m, 0, 0.125, 0.1, v);  // u = 1.125: the first texel of the next tile (0 clamped)
+  CHECK(v[0] == Approx(1.0));
+  std::filesystem::remove(png);
+}
+
 TEST_CASE("a mapped texture signal bakes back to itself through its own atlas", "[signal]") {
   // The plane's atlas is the texture's own mapping, so the SAE only sees resampling.
   Mesh m = plane(8);

@@ -24,6 +24,9 @@ struct Signal {
   Image texture;                      ///< mapped signals only
   std::vector<Vec2d> uvs;             ///< mapped: texture coordinates referenced by face_uvs
   std::vector<Face> face_uvs;         ///< mapped: #F indices into uvs
+  /// mapped: some texture coordinates leave [0, 1]², so the texture repeats (as `render` and
+  /// the glTF sampler read it); otherwise it is clamped at its borders.
+  bool tiling = false;
 
   bool is_mapped() const { return !texture.empty(); }
   /// The signal at barycentric point (1 − b1 − b2, b1, b2) of face f, `dimension` values.
