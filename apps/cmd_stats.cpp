@@ -27,6 +27,18 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
     throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
   const isochart::AtlasQuality q = isochart::measure_atlas(r.mesh, a.aspect);
   const int turned = q.stretch.flipped - q.stretch.degenerate;
+  // The packing ratio is measured against the UVs' own bounding box: it says nothing of a
+  // texture the UVs leave (an atlas at u in [5, 6] read 1), and overlaps count twice (2).
+  if (q.uv_min.x < 0 || q.uv_min.y < 0 || q.uv_max.x > 1 || q.uv_max.y > 1) {
+    std::ostringstream w;
+    w << "texture coordinates reach outside [0, 1] (" << q.uv_min.x << ", " << q.uv_min.y << ") to ("
+      << q.uv_max.x << ", " << q.uv_max.y
+      << "); the packing ratio is of their own bounding box, not of the texture";
+    ctx.warn(a.input, w.str());
+  }
+  if (q.overlapping_pairs > 0)
+    ctx.warn(a.input, std::to_string(q.overlapping_pairs) +
+                          " overlapping triangle pairs: the packing ratio counts their UV area twice");
 
   nlohmann::json j;
   j["file"] = a.input;

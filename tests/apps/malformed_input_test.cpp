@@ -855,6 +855,23 @@ TEST_CASE("synth's textures are named without spaces, so MTL readers find them",
   CHECK(fs::exists(tmp.path / "my out_mcgim.obj"));
 }
 
+TEST_CASE("stats says when its packing ratio is not of the texture", "[cli]") {
+  // UVs all outside [0, 1] read "packing ratio 1", two charts on one square "2", silently.
+  TempDir tmp("stats_ratio");
+  const fs::path err = tmp.path / "err.txt", outside = tmp.path / "outside.obj",
+                 overlap = tmp.path / "overlap.obj";
+  std::ofstream(outside) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 5 -3\nvt 6 -3\nvt 6 -2\nvt 5 -2\n"
+                            "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+  std::ofstream(overlap) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"
+                            "vt 0.1 0.1\nvt 0.9 0.1\nvt 0.9 0.9\nvt 0.1 0.9\n"
+                            "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\nf 2/1 5/2 6/3\nf 2/1 6/3 3/4\n";
+  CHECK(run_cli("stats '" + outside.string() + "'", err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains("texture coordinates reach outside [0, 1] (5, -3) to (6, -2)"));
+  CHECK(run_cli("stats '" + overlap.string() + "'", err) == 0);
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("overlapping triangle pairs: the packing ratio counts their UV area twice"));
+}
+
 TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
   // Faces without vt read the texel at (0, 0): half the surface got a made-up signal.
   TempDir tmp("signal_uvs");
