@@ -304,8 +304,10 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
          "How much better (relative neighbourhood distance) a match elsewhere in the exemplar must be "
          "than continuing a neighbour's patch (default 0.1)")
       ->check(number_in(0.0, 10.0));
-  sub->add_option("--start-samples", args->start_samples,
-                  "Never synthesize pyramid levels with fewer samples than N (default 1000)")
+  sub->add_option(
+         "--start-samples", args->start_samples,
+         "Start at no level with fewer samples than N, the finest excepted, which is always synthesized "
+         "(default 1000)")
       ->check(CLI::Range(1, 1 << 28));
   sub->add_option(
          "--start-level", args->start_level,
