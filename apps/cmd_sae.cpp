@@ -1,7 +1,9 @@
 // `isocharts sae MESH_WITH_UV --signal normals --res 256`: the signal approximation error of an
 // atlas (Iso-charts §9.3).
 
+#include <array>
 #include <cmath>
+#include <map>
 #include <sstream>
 
 #include "cli.h"
@@ -62,8 +64,8 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
       ctx.warn(a.input,
                std::to_string(q.stretch.degenerate) + " triangles have zero area in UV; they get no texels");
   }
-  // The signal lives on the source mesh (same vertices and faces) when one is given: e.g. its
-  // vertex colours, or a texture through its original texture coordinates.
+  // The signal lives on the source mesh (the atlas's mesh, perhaps numbered otherwise) when one is given:
+  // e.g. its vertex colours, or a texture through its original texture coordinates.
   isochart::Signal signal;
   if (!a.source.empty()) {
     // Joined like the atlas, so that a source split at the same seams numbers alike.
@@ -75,24 +77,85 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
                                                std::to_string(src.num_faces()) + " faces, the atlas " +
                                                std::to_string(mesh.num_vertices()) + " and " +
                                                std::to_string(mesh.num_faces()));
-    // The signal goes to the atlas's vertex of the same number: a re-export that renumbered
-    // the vertices gave a wrong SAE (9x on eight) without a word.
+    // Each atlas vertex takes the source vertex at its position (a glb, split by chart and
+    // joined again on loading, numbers them otherwise), and each atlas face the source face on
+    // the same vertices, its corners turned alike (a glb also groups faces by chart). Matching
+    // by number alone gave a wrong SAE without a word (9x on eight) or refused glb atlases.
     const double tolerance = 1e-6 * isochart::bounding_box(mesh).diagonal();
-    for (int v = 0; v < mesh.num_vertices(); ++v)
-      if (!(isochart::norm(src.positions[v] - mesh.positions[v]) <= tolerance)) {
-        std::ostringstream msg;
-        msg << "vertex " << v << " is at (" << src.positions[v].x << ", " << src.positions[v].y << ", "
-            << src.positions[v].z << "), the atlas's at (" << mesh.positions[v].x << ", "
-            << mesh.positions[v].y << ", " << mesh.positions[v].z
-            << "); the source must have the atlas's vertices in the same order";
-        throw isochart::InputError(a.source, msg.str());
+    std::vector<int> source_of(mesh.num_vertices(), -1);
+    {
+      const double cell = std::max(tolerance, 1e-300);
+      auto cell_of = [&](const isochart::Vec3d& p) {
+        return std::array<long long, 3>{static_cast<long long>(std::floor(p.x / cell)),
+                                        static_cast<long long>(std::floor(p.y / cell)),
+                                        static_cast<long long>(std::floor(p.z / cell))};
+      };
+      std::map<std::array<long long, 3>, std::vector<int>> grid;
+      for (int v = 0; v < src.num_vertices(); ++v) grid[cell_of(src.positions[v])].push_back(v);
+      std::vector<char> taken(src.num_vertices(), 0);
+      for (int v = 0; v < mesh.num_vertices(); ++v) {
+        const auto c = cell_of(mesh.positions[v]);
+        int best = -1;
+        double best_d = tolerance;
+        for (long long dx = -1; dx <= 1; ++dx)
+          for (long long dy = -1; dy <= 1; ++dy)
+            for (long long dz = -1; dz <= 1; ++dz) {
+              const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
+              if (it == grid.end()) continue;
+              for (int u : it->second) {
+                const double d = isochart::norm(src.positions[u] - mesh.positions[v]);
+                if (!taken[u] && (d < best_d || (d == best_d && best < 0))) {
+                  best = u;
+                  best_d = d;
+                }
+              }
+            }
+        if (best < 0) {
+          std::ostringstream msg;
+          msg << "has no vertex at the atlas's vertex " << v << " (" << mesh.positions[v].x << ", "
+              << mesh.positions[v].y << ", " << mesh.positions[v].z
+              << "); the source must be the atlas's mesh";
+          throw isochart::InputError(a.source, msg.str());
+        }
+        taken[best] = 1;
+        source_of[v] = best;
       }
-    for (int f = 0; f < mesh.num_faces(); ++f)
-      if (src.faces[f] != mesh.faces[f])
-        throw isochart::InputError(a.source, "face " + std::to_string(f) +
-                                                 " has other vertices than the atlas's; the source must "
-                                                 "have the atlas's faces in the same order");
-    signal = isochart::make_signal(src, a.signal, a.source);
+    }
+    std::vector<int> atlas_of(src.num_vertices(), -1);
+    for (int v = 0; v < mesh.num_vertices(); ++v) atlas_of[source_of[v]] = v;
+    isochart::Mesh ordered = src;
+    ordered.positions = mesh.positions;
+    for (int v = 0; v < mesh.num_vertices(); ++v) {
+      if (src.has_normals()) ordered.normals[v] = src.normals[source_of[v]];
+      if (src.has_colors()) ordered.colors[v] = src.colors[source_of[v]];
+    }
+    {
+      auto key = [](const isochart::Face& t) {
+        const int k = t[0] < t[1] ? (t[0] < t[2] ? 0 : 2) : (t[1] < t[2] ? 1 : 2);
+        return std::array<int, 3>{t[k], t[(k + 1) % 3], t[(k + 2) % 3]};
+      };
+      std::vector<isochart::Face> renumbered(src.faces.size());
+      std::map<std::array<int, 3>, std::vector<int>> by_corners;
+      for (int g = src.num_faces() - 1; g >= 0; --g) {
+        for (int i = 0; i < 3; ++i) renumbered[g][i] = atlas_of[src.faces[g][i]];
+        by_corners[key(renumbered[g])].push_back(g);
+      }
+      for (int f = 0; f < mesh.num_faces(); ++f) {
+        auto it = by_corners.find(key(mesh.faces[f]));
+        if (it == by_corners.end() || it->second.empty())
+          throw isochart::InputError(a.source, "has no face on the vertices of the atlas's face " +
+                                                   std::to_string(f) +
+                                                   "; the source must be the atlas's mesh");
+        const int g = it->second.back();
+        it->second.pop_back();
+        int turn = 0;
+        while (renumbered[g][turn] != mesh.faces[f][0]) ++turn;
+        ordered.faces[f] = mesh.faces[f];
+        if (src.has_uvs())
+          for (int i = 0; i < 3; ++i) ordered.face_uvs[f][i] = src.face_uvs[g][(turn + i) % 3];
+      }
+    }
+    signal = isochart::make_signal(ordered, a.signal, a.source);
   } else {
     check_signal_uvs(a.signal, loaded, a.input);
     signal = isochart::make_signal(mesh, a.signal, a.input);
@@ -137,7 +200,8 @@ void add_sae(CLI::App& app, Context& ctx, Action& action) {
       ->capture_default_str();
   sub->add_option(
       "--source", args->source,
-      "Mesh carrying the signal (same vertices and faces), e.g. the original with its colours or UVs");
+      "Mesh carrying the signal (the atlas's mesh: vertices matched by position, faces by their vertices), "
+      "e.g. the original with its colours or UVs");
   sub->add_option("--res", args->res, "Texture size in texels (square)")
       ->check(CLI::Range(1, 8192))
       ->capture_default_str();

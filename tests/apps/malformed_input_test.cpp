@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "isochart/image.h"
 #include "isochart/io_test_util.h"
 
 using namespace io_test;
@@ -687,9 +688,9 @@ TEST_CASE("remesh --atlas warns when the atlas's surface is not the input's topo
                              "boundary loops, the input's 2 and 0; the remesh follows the atlas"));
 }
 
-TEST_CASE("sae --source refuses a source whose vertices are in another order", "[cli]") {
-  // The signal goes to the atlas vertex of the same number; a renumbered re-export of the
-  // source gave a wrong SAE without a word.
+TEST_CASE("sae --source matches a renumbered source by position, and refuses another mesh", "[cli]") {
+  // The signal went to the atlas vertex of the same number: a renumbered re-export of the
+  // source gave a wrong SAE without a word (9x on eight).
   TempDir tmp("sae_source");
   const fs::path atlas = tmp.path / "a.obj", shuffled = tmp.path / "shuffled.obj", err = tmp.path / "err.txt";
   // The same mesh with its vertex list reversed and the faces renumbered to match.
@@ -710,12 +711,45 @@ TEST_CASE("sae --source refuses a source whose vertices are in another order", "
     text += "\n";
   }
   write_bytes(shuffled, text);
-  const std::string run = "sae '" + atlas.string() + "' --signal normals --res 64 --source ";
-  CHECK(run_cli(run + "'" + atlas.string() + "'", err) == 0);
-  CHECK(run_cli(run + "'" + shuffled.string() + "'", err) == 2);
-  CHECK_THAT(read_bytes(err),
-             Catch::Contains("shuffled.obj: vertex 0 is at") &&
-                 Catch::Contains("the source must have the atlas's vertices in the same order"));
+  const std::string run = "-q --json sae '" + atlas.string() + "' --signal normals --res 64 --source ";
+  auto sae = [&](const fs::path& source) {
+    REQUIRE(run_cli(run + "'" + source.string() + "' --report '" + (tmp.path / "r.json").string() + "'",
+                    err) == 0);
+    const std::string json = read_bytes(tmp.path / "r.json");
+    return std::stod(json.substr(json.find("\"sae\":") + 6));
+  };
+  CHECK(sae(shuffled) == Approx(sae(atlas)).epsilon(1e-12));
+  // Another mesh (one vertex moved) is refused.
+  std::string moved = text;
+  moved.replace(0, moved.find('\n'), "v 9 9 9");
+  write_bytes(tmp.path / "moved.obj", moved);
+  CHECK(run_cli(run + "'" + (tmp.path / "moved.obj").string() + "'", err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("moved.obj: has no vertex at the atlas's vertex") &&
+                                  Catch::Contains("the source must be the atlas's mesh"));
+}
+
+TEST_CASE("sae --source takes the atlas's faces in any order, as a glb writes them", "[cli]") {
+  // A glb groups faces by chart: the source's faces came back in another order, and sae
+  // refused isocharts' own glb atlases of a textured mesh.
+  TempDir tmp("sae_order");
+  const fs::path src = tmp.path / "src.obj", glb = tmp.path / "re.glb", obj = tmp.path / "re.obj",
+                 png = tmp.path / "t.png", err = tmp.path / "err.txt";
+  REQUIRE(run_cli("-q atlas builtin:torus -o '" + src.string() + "'", err) == 0);
+  REQUIRE(run_cli("-q atlas '" + src.string() + "' --max-l2 1.02 -o '" + glb.string() + "' -o '" +
+                      obj.string() + "'",
+                  err) == 0);
+  isochart::Image img(16, 16, 3, 0.0f);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) img.at(x, y, 0) = static_cast<float>((x * 7 + y * 3) % 16) / 15;
+  isochart::write_image(png.string(), img);
+  auto sae = [&](const fs::path& atlas) {
+    REQUIRE(run_cli("-q --json sae '" + atlas.string() + "' --signal texture:'" + png.string() +
+                        "' --source '" + src.string() + "' --report '" + (tmp.path / "r.json").string() + "'",
+                    err) == 0);
+    const std::string text = read_bytes(tmp.path / "r.json");
+    return std::stod(text.substr(text.find("\"sae\":") + 6));
+  };
+  CHECK(sae(glb) == Approx(sae(obj)).epsilon(1e-6));  // the glb holds float positions
 }
 
 TEST_CASE("bad image outputs and device outputs are refused before any work", "[cli]") {
