@@ -9,11 +9,14 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <mutex>
+#include <sstream>
 
 #include "isochart/error.h"
 #include "isochart/image.h"
+#include "isochart/stretch.h"
 
 namespace cli {
 
@@ -284,6 +287,22 @@ std::vector<int> parse_levels(const std::vector<std::string>& given, int lo, int
       levels.push_back(side);
     }
   return levels;
+}
+
+std::string describe_texture_aspect(double aspect) {
+  if (aspect == 1.0) return "a square texture";
+  std::ostringstream w;
+  w << "a texture " << std::setprecision(3) << (aspect > 1 ? aspect : 1 / aspect)
+    << (aspect > 1 ? " times as wide as high" : " times as high as wide");
+  return w.str();
+}
+
+void warn_texture_aspect(const Context& ctx, const std::string& file, const isochart::Mesh& atlas,
+                         const std::string& what) {
+  const double aspect = isochart::detect_texture_aspect(atlas);
+  if (aspect != 1.0)
+    ctx.warn(file,
+             "the texture coordinates look laid out for " + describe_texture_aspect(aspect) + "; " + what);
 }
 
 void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atlas, const std::string& file) {

@@ -164,6 +164,14 @@ isochart::MeshFormat output_mesh_format(const std::string& path,
 /// \throw InputError(file, ...) when it does not.
 void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atlas, const std::string& file);
 
+/// "a square texture", "a texture 3.89 times as wide as high" (width / height `aspect`).
+std::string describe_texture_aspect(double aspect);
+
+/// Warns when an external atlas's UVs look laid out for a non-square texture
+/// (isochart::detect_texture_aspect): `what` says what is done about it.
+void warn_texture_aspect(const Context& ctx, const std::string& file, const isochart::Mesh& atlas,
+                         const std::string& what);
+
 /// The items of a comma-separated option value. An empty item ("64,,32", a trailing comma) is
 /// refused: CLI11's own splitting dropped them silently.
 std::vector<std::string> split_items(const std::string& option, const std::string& text);

@@ -230,7 +230,10 @@ class Bench {
     const auto t0 = Clock::now();
     // Loaded once: an explicit external:FILE is tried against every mesh.
     auto it = loaded_.find(file);
-    if (it == loaded_.end()) it = loaded_.emplace(file, load_any(ctx_, file, true)).first;
+    if (it == loaded_.end()) {
+      it = loaded_.emplace(file, load_any(ctx_, file, true)).first;
+      warn_texture_aspect(ctx_, file, it->second, "its charts are measured and packed at that width");
+    }
     b.geometry = it->second;
     try {
       b.atlas = isochart::atlas_from_uvs(b.geometry);

@@ -132,6 +132,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     if (!atlas.has_uvs())
       throw isochart::InputError(a.atlas, "the atlas has no texture coordinates (vt)");
     check_atlas_matches(input, atlas, a.atlas);
+    warn_texture_aspect(ctx, a.atlas, atlas, "its charts are packed at that width");
     {
       // The remesh is of the atlas's surface; one with a face missing or a seam left open
       // (a hole in a closed input) passes the size check above, so say so.

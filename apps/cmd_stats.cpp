@@ -36,6 +36,14 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
       << "); the packing ratio is of their own bounding box, not of the texture";
     ctx.warn(a.input, w.str());
   }
+  // Stretch in [0,1]² of a 4:1 texture's atlas reads as charts flattened fourfold.
+  const double detected = isochart::detect_texture_aspect(r.mesh);
+  if (std::abs(std::log(detected / a.aspect)) > std::log(1.2)) {
+    std::ostringstream w;
+    w << "the texture coordinates look laid out for " << describe_texture_aspect(detected)
+      << "; stretch is measured for --aspect " << a.aspect;
+    ctx.warn(a.input, w.str());
+  }
   if (q.overlapping_pairs > 0)
     ctx.warn(a.input, std::to_string(q.overlapping_pairs) +
                           " overlapping triangle pairs: the packing ratio counts their UV area twice");
@@ -45,6 +53,7 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
   j["faces"] = r.mesh.num_faces();
   j["charts"] = q.charts;
   j["aspect"] = a.aspect;
+  j["aspect_detected"] = detected;
   j["l2_stretch"] = finite_or_null(q.stretch.l2);
   j["linf_stretch"] = finite_or_null(q.stretch.linf);
   j["flipped"] = turned;

@@ -419,6 +419,11 @@ Atlas atlas_from_uvs(const Mesh& mesh) {
     }
     ++atlas.charts[c].faces;
   }
+  // Coordinates laid out for a W×H texture are W/H times too short along u for their surface:
+  // packed, measured or optimized as they are, every chart would count as flattened.
+  const double aspect = detect_texture_aspect(mesh);
+  if (aspect != 1.0)
+    for (Vec2d& p : atlas.uvs) p.x *= aspect;
   std::vector<detail::AtlasChart> charts = detail::split_atlas_charts(mesh, atlas);
   for (int c = 0; c < nc; ++c) {
     detail::AtlasChart& ch = charts[c];

@@ -145,6 +145,28 @@ StretchStats measure_texture_stretch(const Mesh& mesh, double texture_aspect) {
   });
 }
 
+double detect_texture_aspect(const Mesh& mesh) {
+  if (!mesh.has_uvs()) return 1.0;
+  double weight = 0, log_sum = 0;
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Vec3d& q0 = mesh.positions[mesh.faces[f][0]];
+    const Vec3d e1 = mesh.positions[mesh.faces[f][1]] - q0, e2 = mesh.positions[mesh.faces[f][2]] - q0;
+    const Vec2d& p0 = mesh.uvs[mesh.face_uvs[f][0]];
+    const Vec2d d1 = mesh.uvs[mesh.face_uvs[f][1]] - p0, d2 = mesh.uvs[mesh.face_uvs[f][2]] - p0;
+    const double det = d1.x * d2.y - d2.x * d1.y;
+    const double area = 0.5 * norm(cross(e1, e2));
+    if (!(std::abs(det) > 0) || !(area > 0)) continue;
+    // The Jacobian's columns: the surface's rate of change along u and along v.
+    const double su = norm((e1 * d2.y - e2 * d1.y) / det), sv = norm((e2 * d1.x - e1 * d2.x) / det);
+    if (!(su > 0) || !(sv > 0) || !std::isfinite(su / sv)) continue;
+    weight += area;
+    log_sum += area * std::log(su / sv);
+  }
+  if (!(weight > 0)) return 1.0;
+  const double aspect = std::exp(log_sum / weight);
+  return std::isfinite(aspect) && std::abs(std::log(aspect)) > std::log(1.2) ? aspect : 1.0;
+}
+
 StretchStats measure_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,
                              const std::vector<Vec2d>& uv) {
   return accumulate(static_cast<int>(faces.size()), [&](int f, Vec3d* q, Vec2d* p) {

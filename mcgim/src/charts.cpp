@@ -333,6 +333,7 @@ AtlasCharts prepare_atlas(const Mesh& m) {
   a.input_euler = topo.euler_characteristic();
   a.input_boundary_loops = static_cast<int>(topo.boundary_loops().size());
   a.surface_area = isochart::surface_area(m);
+  a.uv_aspect = isochart::detect_texture_aspect(m);
 
   a.charts = split_charts(m, topo);
   for (std::size_t c = 0; c < a.charts.size(); ++c) build_chart(m, static_cast<int>(c), a.charts[c]);
@@ -518,8 +519,9 @@ Placement place_charts(const AtlasCharts& a, const LevelOptions& o, const std::v
     for (int c = 0; c < nc; ++c) {
       const Chart& ch = a.charts[c];
       pack[c].uv = ch.uv;
-      if (ch.area_uv < 0)
-        for (Vec2d& uv : pack[c].uv) uv.x = -uv.x;
+      const double sx = ch.area_uv < 0 ? -a.uv_aspect : a.uv_aspect;
+      if (sx != 1.0)
+        for (Vec2d& uv : pack[c].uv) uv.x *= sx;
       pack[c].faces = ch.local_faces;
       const double size =
           keep && ch.area_uv != 0 ? std::abs(ch.area_uv) * (total_3d / total_uv) : ch.area_3d;

@@ -70,6 +70,9 @@ struct AtlasCharts {
   int input_euler = 0;
   int input_boundary_loops = 0;
   double surface_area = 0;
+  // Width / height of the texture the atlas's UVs were laid out for (detect_texture_aspect):
+  // re-packing scales u by it, so charts from a 4:1 texture are not packed 4 times flattened.
+  double uv_aspect = 1;
 };
 
 // Splits the atlas into charts, checks that each is a disk, and builds the cut graph.

@@ -906,6 +906,24 @@ TEST_CASE("stats says when its packing ratio is not of the texture", "[cli]") {
              Catch::Contains("overlapping triangle pairs: the packing ratio counts their UV area twice"));
 }
 
+TEST_CASE("stats says when the UVs were laid out for another texture shape", "[cli]") {
+  // A unit square laid out 4 times narrower than high: a 4:1 texture's atlas, whose stretch
+  // measured in a square texture reads as a chart flattened fourfold.
+  TempDir tmp("stats_aspect");
+  const fs::path err = tmp.path / "err.txt", wide = tmp.path / "wide.obj";
+  std::ofstream(wide) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 0.25 0\nvt 0.25 1\nvt 0 1\n"
+                         "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+  CHECK(run_cli("stats '" + wide.string() + "'", err) == 0);
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("wide.obj: the texture coordinates look laid out for a texture 4 "
+                             "times as wide as high; stretch is measured for --aspect 1"));
+  CHECK(run_cli("stats '" + wide.string() + "' --aspect 4", err) == 0);
+  CHECK(read_bytes(err).find("look laid out") == std::string::npos);
+  CHECK(run_cli("stats '" + wide.string() + "' --aspect 0.25", err) == 0);
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("4 times as wide as high; stretch is measured for --aspect 0.25"));
+}
+
 TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
   // Faces without vt read the texel at (0, 0): half the surface got a made-up signal.
   TempDir tmp("signal_uvs");

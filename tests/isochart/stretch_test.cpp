@@ -5,6 +5,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "isochart/baselines.h"
+#include "isochart/builtin.h"
+
 using namespace isochart;
 
 namespace {
@@ -262,4 +265,25 @@ TEST_CASE("the whole-atlas overlap count proves charts apart or counts pairs", "
     CHECK_FALSE(all_pairs.empty());
     CHECK(overlapping_uv_pairs(m) == all_pairs);
   }
+}
+
+TEST_CASE("the texture aspect an atlas was laid out for is read from its UVs", "[stretch]") {
+  const Mesh mesh = make_builtin("sphere");
+  LscmOptions o;
+  const Atlas a = build_lscm_atlas(mesh, o);
+  Mesh m = a.apply_to(mesh);
+  // A square texture's atlas reads as exactly 1 (its charts' scatter stays under 20 %).
+  CHECK(detect_texture_aspect(m) == 1.0);
+  for (double aspect : {4.0, 2.0, 0.125}) {
+    Mesh squashed = m;
+    for (Vec2d& p : squashed.uvs) p.x /= aspect;
+    INFO(aspect);
+    CHECK(detect_texture_aspect(squashed) == Approx(aspect).epsilon(0.05));
+    // The charts read back from the file keep the square atlas's stretch.
+    const Atlas e = atlas_from_uvs(squashed);
+    const Atlas f = atlas_from_uvs(m);
+    REQUIRE(e.num_charts() == f.num_charts());
+    for (int c = 0; c < e.num_charts(); ++c) CHECK(e.charts[c].l2 == Approx(f.charts[c].l2).epsilon(0.02));
+  }
+  CHECK(detect_texture_aspect(mesh) == 1.0);  // no UVs
 }

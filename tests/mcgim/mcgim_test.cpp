@@ -635,6 +635,31 @@ TEST_CASE("re-packing can keep the atlas's relative chart sizes", "[mcgim]") {
   CHECK(ratio < 4.7);
 }
 
+TEST_CASE("re-packing unsquashes an atlas laid out for a non-square texture", "[mcgim]") {
+  // The cube's square faces laid out for a texture 4 times as wide as high: in [0,1]² each face
+  // is 4 times narrower than high. Packed as they are, the samples would be 4 times as dense
+  // along u, and each face's samples a 1:4 strip.
+  isochart::Mesh m = mcgim_test::cube_atlas(5);
+  for (isochart::Vec2d& p : m.uvs) p.x /= 4;
+  LevelOptions o;
+  o.width = o.height = 96;
+  const Level lv = build_level(m, o);
+  check_watertight(lv, 2);
+  REQUIRE(lv.stats.charts == 6);
+  std::vector<std::array<int, 4>> box(6, {o.width, o.height, -1, -1});
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x)
+      if (const int c = lv.image.chart[static_cast<std::size_t>(y) * o.width + x]; c >= 0) {
+        box[c] = {std::min(box[c][0], x), std::min(box[c][1], y), std::max(box[c][2], x),
+                  std::max(box[c][3], y)};
+      }
+  for (int c = 0; c < 6; ++c) {
+    INFO("chart " << c);
+    const double w = box[c][2] - box[c][0] + 1, h = box[c][3] - box[c][1] + 1;
+    CHECK(std::max(w, h) / std::min(w, h) < 1.3);
+  }
+}
+
 TEST_CASE("a coarse level enlarges charts too small to keep the topology", "[mcgim]") {
   // At 32² the creature's 13 iso-charts get about 330 samples: packed at one density, two
   // small charts are contracted and the remesh pinches (Euler characteristic 3, a

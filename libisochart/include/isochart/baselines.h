@@ -57,7 +57,8 @@ void optimize_atlas_stretch(const Mesh& mesh, Atlas& atlas, const OptimizeOption
 /// OBJ with `vt`) into an Atlas of `mesh`'s faces: charts are the edge-connected pieces with
 /// continuous texture coordinates (isochart::uv_charts). A chart laid out mirrored (negative
 /// total signed UV area; UVAtlas writes v flipped) is mirrored back so that stretch counts no
-/// flips; packers may mirror freely. Not packed: call pack_atlas.
+/// flips; packers may mirror freely. UVs laid out for a non-square texture
+/// (detect_texture_aspect) are first scaled along u to square texels. Not packed: call pack_atlas.
 /// \throw InputError when the mesh has no texture coordinates or a chart has zero UV area.
 Atlas atlas_from_uvs(const Mesh& mesh);
 
