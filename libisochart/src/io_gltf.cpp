@@ -240,6 +240,9 @@ class GltfReader {
       };
       const std::array<int, 4> ids = {attr("POSITION"), attr("NORMAL"), attr("TEXCOORD_0"), attr("COLOR_0")};
       if (ids[0] < 0) fail(what + " has no POSITION attribute");
+      // Lightmap UVs come as TEXCOORD_1; read silently as "no texture coordinates" they hid
+      // why an atlas was missing.
+      if (ids[2] < 0 && attr("TEXCOORD_1") >= 0) ++second_uvs_only_;
       const AccessorView pos = view(ids[0], what + " POSITION", {TINYGLTF_TYPE_VEC3}, true);
       const std::size_t nv = pos.count;
       auto check_count = [&](const AccessorView& v, const char* name) {
@@ -362,6 +365,10 @@ class GltfReader {
         if (puv.empty()) puv.assign(3, zero);
       raw_.warnings.push_back(std::to_string(nf - with_uvs_) + " faces have no TEXCOORD_0; they get (0, 0)");
     }
+    if (second_uvs_only_ > 0)
+      raw_.warnings.push_back(std::to_string(second_uvs_only_) +
+                              (second_uvs_only_ == 1 ? " primitive has" : " primitives have") +
+                              " TEXCOORD_1 but no TEXCOORD_0; only TEXCOORD_0 is read");
     if (with_normals_ == nv && nv > 0)
       raw_.normals = std::move(normals_);
     else if (with_normals_ > 0)
@@ -385,7 +392,7 @@ class GltfReader {
   std::vector<char> visited_;
   std::vector<Vec3d> normals_, colors_;
   long long with_normals_ = 0, with_colors_ = 0, with_uvs_ = 0;
-  int groups_ = 0, skipped_primitives_ = 0;
+  int groups_ = 0, skipped_primitives_ = 0, second_uvs_only_ = 0;
 };
 
 // Images are not needed to read a mesh, so they are not decoded.

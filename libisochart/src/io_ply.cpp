@@ -458,6 +458,16 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
       raw.warnings.push_back(reach.str() + ": read as 8-bit values (0..255) and scaled to [0, 1]");
     }
   }
+  // Colours per face (some scanners and CAD exports) have nowhere to go: signals, the atlas
+  // texture and the written mesh are per vertex.
+  if (face_el) {
+    bool face_colors = false;
+    for (const auto& p : face_el->props) {
+      const Role r = vertex_role(p.name);
+      face_colors |= !p.is_list && (r == Role::R || r == Role::G || r == Role::B);
+    }
+    if (face_colors) raw.warnings.push_back("face colours are not read (only vertex colours are)");
+  }
   return raw;
 }
 

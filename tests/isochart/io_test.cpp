@@ -501,6 +501,19 @@ TEST_CASE("PLY: float colours stored as 0..255 are scaled, with a warning", "[io
              Catch::Contains("float vertex colours reach 300, beyond both [0, 1] and the 8-bit range"));
 }
 
+TEST_CASE("PLY: face colours are named as not read", "[io]") {
+  TempDir d;
+  const RawMesh raw = read_raw_mesh(d.write(
+      "fc.ply",
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nproperty uchar red\n"
+      "property uchar green\nproperty uchar blue\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 255 0 0\n"));
+  REQUIRE(raw.polygons.size() == 1);
+  CHECK(raw.colors.empty());
+  REQUIRE(raw.warnings.size() == 1);
+  CHECK(raw.warnings[0] == "face colours are not read (only vertex colours are)");
+}
+
 TEST_CASE("PLY: errors name the line or the element", "[io]") {
   TempDir d;
   const std::string full = ply_tetra("binary_little_endian");
@@ -667,6 +680,27 @@ TEST_CASE("glTF: a chain of nodes deeper than the call stack loads", "[io]") {
   const RawMesh r = read_raw_mesh(d.write("deep.glb", glb_of(s)));
   REQUIRE(r.positions.size() == 4);
   CHECK(r.positions[2].x == Approx(1 + depth * 1e-3).epsilon(1e-9));
+}
+
+TEST_CASE("glTF: texture coordinates only in TEXCOORD_1 are named, not dropped silently", "[io]") {
+  TempDir d;
+  GltfSample s = gltf_sample();
+  for (auto& mesh : s.doc["meshes"])
+    for (auto& prim : mesh["primitives"]) {
+      prim["attributes"]["TEXCOORD_1"] = prim["attributes"]["TEXCOORD_0"];
+      prim["attributes"].erase("TEXCOORD_0");
+    }
+  const RawMesh r = read_raw_mesh(d.write("lightmap.glb", glb_of(s)));
+  CHECK(r.uvs.empty());
+  REQUIRE(r.warnings.size() == 1);
+  CHECK(r.warnings[0] == "3 primitives have TEXCOORD_1 but no TEXCOORD_0; only TEXCOORD_0 is read");
+  // Both sets: TEXCOORD_0 is read, nothing to say.
+  GltfSample both = gltf_sample();
+  for (auto& mesh : both.doc["meshes"])
+    for (auto& prim : mesh["primitives"]) prim["attributes"]["TEXCOORD_1"] = prim["attributes"]["TEXCOORD_0"];
+  const RawMesh b = read_raw_mesh(d.write("both.glb", glb_of(both)));
+  CHECK(b.uvs.size() == 8);
+  CHECK(b.warnings.empty());
 }
 
 TEST_CASE("glTF: malformed files are clear errors", "[io]") {
