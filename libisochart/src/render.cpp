@@ -548,10 +548,20 @@ Image render_uv_layout(const Mesh& mesh, int width, int height, double texture_a
       lo = {std::min(lo.x, mesh.uvs[i].x), std::min(lo.y, mesh.uvs[i].y)};
       hi = {std::max(hi.x, mesh.uvs[i].x), std::max(hi.y, mesh.uvs[i].y)};
     }
+  // The view covers whole texture tiles (the unit square and its repeats), with their borders
+  // drawn, so UVs that leave [0,1]² are seen against the texture; a layout spread over too
+  // many tiles for that is drawn alone.
   const bool unit_square = lo.x >= -1e-9 && lo.y >= -1e-9 && hi.x <= 1 + 1e-9 && hi.y <= 1 + 1e-9;
   if (unit_square) {
     lo = {0, 0};
     hi = {1, 1};
+  }
+  constexpr double kMaxTiles = 16;
+  const bool tiles = unit_square || (std::ceil(hi.x - 1e-9) - std::floor(lo.x + 1e-9) <= kMaxTiles &&
+                                     std::ceil(hi.y - 1e-9) - std::floor(lo.y + 1e-9) <= kMaxTiles);
+  if (tiles && !unit_square) {
+    lo = {std::floor(lo.x + 1e-9), std::floor(lo.y + 1e-9)};
+    hi = {std::ceil(hi.x - 1e-9), std::ceil(hi.y - 1e-9)};
   }
   // A unit of u is texture_aspect times as long as a unit of v on the texture.
   const double du = std::max((hi.x - lo.x) * texture_aspect, 1e-12), dv = std::max(hi.y - lo.y, 1e-12);
@@ -595,9 +605,12 @@ Image render_uv_layout(const Mesh& mesh, int width, int height, double texture_a
   const double mean_edge_px = edge_length_sum / (3.0 * mesh.num_faces()) / ss;
   const double inner_alpha = std::clamp((mean_edge_px - 1.5) / 8.0, 0.12, 0.55);
   std::vector<Segment> segments, boundary;
-  if (unit_square) {
-    const Vec2d corners[4] = {to_px({0, 0}), to_px({1, 0}), to_px({1, 1}), to_px({0, 1})};
-    for (int i = 0; i < 4; ++i) segments.push_back({corners[i], corners[(i + 1) % 4], 0.5 * ss, {0.6, 0.6, 0.6}, 1});
+  if (tiles) {
+    const Vec3d grey{0.6, 0.6, 0.6};
+    for (double u = lo.x; u <= hi.x + 0.5; u += 1)
+      segments.push_back({to_px({u, lo.y}), to_px({u, hi.y}), 0.5 * ss, grey, 1});
+    for (double v = lo.y; v <= hi.y + 0.5; v += 1)
+      segments.push_back({to_px({lo.x, v}), to_px({hi.x, v}), 0.5 * ss, grey, 1});
   }
   for (int f = 0; f < mesh.num_faces(); ++f) {
     for (int k = 0; k < 3; ++k) {

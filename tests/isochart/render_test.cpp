@@ -356,6 +356,31 @@ TEST_CASE("UV layout draws charts on white with dark boundaries", "[render]") {
   CHECK(count_pixels(img, 0.3f) > 100);
 }
 
+TEST_CASE("UVs that leave the unit square are drawn against the texture's tiles", "[render]") {
+  // Shifted by 1.5 in u the discs span u 1.5..2.5: the view is the tiles u 1..3, v 0..1, with the
+  // tile border u = 2 drawn grey between the discs (it was a bare layout, no texture in sight).
+  Mesh m = two_chart_sphere();
+  for (Vec2d& p : m.uvs) p.x += 1.5;
+  const int w = 256, h = 128;
+  const Image img = render_uv_layout(m, w, h);
+  const double margin = 0.03 * h, scale = std::min((w - 2 * margin) / 2, h - 2 * margin);
+  const double ox = 0.5 * (w - 2 * scale), oy = 0.5 * (h - scale);
+  auto pixel_of = [&](double u, double v) {
+    return std::pair<int, int>{static_cast<int>(std::lround(ox + (u - 1) * scale)),
+                               static_cast<int>(oy + (1 - v) * scale)};
+  };
+  for (const double v : {0.1, 0.9}) {
+    const auto [x, y] = pixel_of(2.0, v);
+    INFO(x << "," << y);
+    CHECK(img.at(x, y, 0) < 0.95f);
+    CHECK(img.at(x, y, 0) > 0.4f);
+    CHECK(img.at(x, y, 0) == Approx(img.at(x, y, 2)).margin(0.02));  // grey, not a chart colour
+  }
+  // The left tile is empty: white inside it.
+  const auto [xl, yl] = pixel_of(1.2, 0.5);
+  CHECK(is_white(img, xl, yl));
+}
+
 TEST_CASE("the UV layout of a non-square texture is drawn in the texture's proportions", "[render]") {
   const Mesh m = two_chart_sphere();  // discs centred at u = 1/4 and 3/4
   const int w = 256, h = 128;
