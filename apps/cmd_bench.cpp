@@ -690,7 +690,11 @@ isochart::Image plot_sweep(const std::vector<SweepPoint>& pts, const std::string
     std::vector<const SweepPoint*> s;
     for (const auto& p : pts)
       if (p.mesh == mesh && p.method == methods[m] && std::isfinite(p.l2)) s.push_back(&p);
-    std::sort(s.begin(), s.end(), [](auto* a, auto* b) { return a->charts < b->charts; });
+    // Ties in chart count (several bounds giving the same charts) go from high to low L2, so the
+    // line runs down the column instead of zig-zagging in sweep order.
+    std::sort(s.begin(), s.end(), [](auto* a, auto* b) {
+      return a->charts != b->charts ? a->charts < b->charts : a->l2 > b->l2;
+    });
     for (std::size_t i = 0; i < s.size(); ++i) {
       const double x = ax.px(s[i]->charts), y = ax.py(s[i]->l2);
       c.rect(static_cast<int>(x) - 3, static_cast<int>(y) - 3, static_cast<int>(x) + 3, static_cast<int>(y) + 3,
