@@ -289,6 +289,16 @@ std::vector<int> parse_levels(const std::vector<std::string>& given, int lo, int
   return levels;
 }
 
+void warn_uvs_outside(const Context& ctx, const std::string& file, const isochart::AtlasQuality& q,
+                      const std::string& consequence) {
+  const double tol = 1e-9;
+  if (q.uv_min.x >= -tol && q.uv_min.y >= -tol && q.uv_max.x <= 1 + tol && q.uv_max.y <= 1 + tol) return;
+  std::ostringstream w;
+  w << "texture coordinates reach outside [0, 1] (" << q.uv_min.x << ", " << q.uv_min.y << ") to ("
+    << q.uv_max.x << ", " << q.uv_max.y << "); " << consequence;
+  ctx.warn(file, w.str());
+}
+
 std::string describe_texture_aspect(double aspect) {
   if (aspect == 1.0) return "a square texture";
   std::ostringstream w;

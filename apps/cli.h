@@ -18,6 +18,7 @@
 #include "isochart/error.h"
 #include "isochart/io.h"
 #include "isochart/progress.h"
+#include "isochart/stretch.h"
 
 namespace cli {
 
@@ -163,6 +164,11 @@ isochart::MeshFormat output_mesh_format(const std::string& path,
 /// 1 %. Otherwise its remesh would be of another mesh, measured against this one.
 /// \throw InputError(file, ...) when it does not.
 void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atlas, const std::string& file);
+
+/// Warns "texture coordinates reach outside [0, 1] (u0, v0) to (u1, v1); " + `consequence` when
+/// the atlas's UVs (q.uv_min, q.uv_max) leave the unit square.
+void warn_uvs_outside(const Context& ctx, const std::string& file, const isochart::AtlasQuality& q,
+                      const std::string& consequence);
 
 /// "a square texture", "a texture 3.89 times as wide as high" (width / height `aspect`).
 std::string describe_texture_aspect(double aspect);

@@ -50,13 +50,7 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
     // The SAE bakes the signal into one texture through the UVs: where they leave it, overlap
     // or collapse, texels are shared or clamped and the figure says little about the atlas.
     const isochart::AtlasQuality q = isochart::measure_atlas(mesh);
-    const double tol = 1e-9;
-    if (q.uv_min.x < -tol || q.uv_min.y < -tol || q.uv_max.x > 1 + tol || q.uv_max.y > 1 + tol) {
-      std::ostringstream w;
-      w << "texture coordinates reach outside [0, 1] (" << q.uv_min.x << ".." << q.uv_max.x << " by "
-        << q.uv_min.y << ".." << q.uv_max.y << "); they are clamped to the texture's edge";
-      ctx.warn(a.input, w.str());
-    }
+    warn_uvs_outside(ctx, a.input, q, "they are clamped to the texture's edge");
     if (q.overlapping_pairs > 0)
       ctx.warn(a.input, std::to_string(q.overlapping_pairs) +
                             " pairs of triangles overlap in UV; they share texels, which raises the SAE");

@@ -29,13 +29,7 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
   const int turned = q.stretch.flipped - q.stretch.degenerate;
   // The packing ratio is measured against the UVs' own bounding box: it says nothing of a
   // texture the UVs leave (an atlas at u in [5, 6] read 1), and overlaps count twice (2).
-  if (q.uv_min.x < 0 || q.uv_min.y < 0 || q.uv_max.x > 1 || q.uv_max.y > 1) {
-    std::ostringstream w;
-    w << "texture coordinates reach outside [0, 1] (" << q.uv_min.x << ", " << q.uv_min.y << ") to ("
-      << q.uv_max.x << ", " << q.uv_max.y
-      << "); the packing ratio is of their own bounding box, not of the texture";
-    ctx.warn(a.input, w.str());
-  }
+  warn_uvs_outside(ctx, a.input, q, "the packing ratio is of their own bounding box, not of the texture");
   // Stretch in [0,1]² of a 4:1 texture's atlas reads as charts flattened fourfold.
   const double detected = isochart::detect_texture_aspect(r.mesh);
   if (std::abs(std::log(detected / a.aspect)) > std::log(1.2)) {
