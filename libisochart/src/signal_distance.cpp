@@ -154,7 +154,15 @@ std::vector<double> geodesic_signal_distances(const std::vector<Vec3d>& position
         waiting.push_back(c);
       }
     }
-    for (int c : waiting) update(c);
+    // A waiting vertex can need another waiting one first (both next to a landmark reached
+    // early): passes repeat while they make progress.
+    while (!waiting.empty()) {
+      std::vector<int> still;
+      for (int c : waiting)
+        if (!update(c)) still.push_back(c);
+      if (still.size() == waiting.size()) break;
+      waiting.swap(still);
+    }
   };
   tbb::parallel_for(tbb::blocked_range<int>(0, q, 1), [&](const tbb::blocked_range<int>& r) {
     for (int k = r.begin(); k != r.end(); ++k) row_of(k);
@@ -201,6 +209,11 @@ Embedding combined_embedding(const ChartGeometry& g, const Embedding& geo,
                                   ? beta * dg + (1 - beta) * sig[i] * (avg_geo / avg_sig)
                                   : kInf;
   }
+  // The landmarks' own matrix must be complete for the spectral analysis; should the signal
+  // distances miss one, the chart keeps its geometric embedding rather than failing.
+  for (int k = 0; k < q; ++k)
+    for (int j = 0; j < q; ++j)
+      if (!std::isfinite(e.landmark_distances[k * stride + geo.landmarks[j]])) return geo;
   // Vertices with an infinite distance to some landmark stay at the origin, as the geometric
   // embedding leaves them.
   const auto reached = [&](int v) {

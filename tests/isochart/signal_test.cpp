@@ -113,6 +113,27 @@ double hill(double x, double y) {
 
 }  // namespace
 
+TEST_CASE("signal distance reaches vertices whose distances come before all their neighbours'", "[signal]") {
+  // Rows whose distances are not monotone along the mesh (ties among coincident vertices,
+  // landmark entries averaged over both directions) leave vertices with no visited neighbour
+  // at their turn. One pass over them left a vertex whose neighbours all waited too at +inf,
+  // and `atlas face_mask.off --signal normals` failed with "distances overflow".
+  const int n = 6;
+  const Mesh m = plane(n);
+  const int centre = (n / 2) * (n + 1) + n / 2;
+  const GeodesicSolver solver(m);
+  std::vector<double> rows = solver.distance_rows({0});
+  const Topology topo(m);
+  rows[centre] = 0.01;  // first of all, then its ring
+  for (int v : topo.vertex_neighbors(centre)) rows[v] = 0.02;
+  const std::vector<double> s = detail::geodesic_signal_distances(m.positions, m.faces, {0}, rows,
+                                                                  scalar_signal(m, ramp_x).vertex_values, 1);
+  for (int v = 0; v < m.num_vertices(); ++v) {
+    INFO(v);
+    CHECK(std::isfinite(s[v]));
+  }
+}
+
 TEST_CASE("signal distance along geodesics equals the signal change on a linear ramp", "[signal]") {
   const int n = 20;
   const Mesh m = plane(n);
