@@ -301,9 +301,14 @@ void warn_uvs_outside(const Context& ctx, const std::string& file, const isochar
 
 std::string describe_texture_aspect(double aspect) {
   if (aspect == 1.0) return "a square texture";
+  const double r = aspect > 1 ? aspect : 1 / aspect;
   std::ostringstream w;
-  w << "a texture " << std::setprecision(3) << (aspect > 1 ? aspect : 1 / aspect)
-    << (aspect > 1 ? " times as wide as high" : " times as high as wide");
+  w << "a texture ";
+  if (r >= 100)
+    w << std::llround(r);  // not 1.02e+03
+  else
+    w << std::setprecision(3) << r;
+  w << (aspect > 1 ? " times as wide as high" : " times as high as wide");
   return w.str();
 }
 

@@ -55,6 +55,7 @@ struct BenchArgs {
   std::vector<double> sweep = {1.03, 1.06, 1.1, 1.2, 1.4};
   int sweep_max_faces = 10'000;
   bool no_plots = false;
+  double atlas_aspect = 0;  // external atlases' texture width / height; 0: read from the UVs
 };
 
 // One mesh × method.
@@ -232,11 +233,13 @@ class Bench {
     auto it = loaded_.find(file);
     if (it == loaded_.end()) {
       it = loaded_.emplace(file, load_any(ctx_, file, true)).first;
-      warn_texture_aspect(ctx_, file, it->second, "its charts are measured and packed at that width");
+      if (a_.atlas_aspect == 0)
+        warn_texture_aspect(ctx_, file, it->second,
+                            "its charts are measured and packed at that shape (--atlas-aspect sets it)");
     }
     b.geometry = it->second;
     try {
-      b.atlas = isochart::atlas_from_uvs(b.geometry);
+      b.atlas = isochart::atlas_from_uvs(b.geometry, a_.atlas_aspect);
     } catch (const isochart::InputError& e) {
       throw isochart::InputError(file, e.what());
     }
@@ -254,6 +257,7 @@ class Bench {
   // `note` says so when the match needs an image beyond the largest side.
   mcgim::Level matched_level(const isochart::Mesh& atlas_mesh, long long target, std::string& note) {
     mcgim::LevelOptions lo;
+    lo.atlas_aspect = 1;  // every atlas here, external ones included, was packed square by pack_atlas
     const mcgim::ResolutionChoice rc =
         mcgim::match_resolution(atlas_mesh, target, lo, ctx_.progress(), kMaxImageSide);
     if (rc.capped)
@@ -284,6 +288,7 @@ class Bench {
     mcgim::Level lv;
     if (target <= 0) {
       mcgim::LevelOptions lo;
+      lo.atlas_aspect = 1;
       lo.width = lo.height = a_.res;
       lv = mcgim::build_level(m, lo, ctx_.progress());
       target = lv.stats.defined_samples;
@@ -882,6 +887,10 @@ void add_bench(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--data", args->data, "Shared data directory (meshes/, baseline_atlases/)")->capture_default_str();
   sub->add_option("--max-l2", args->max_l2, "L2 stretch bound of every method")->capture_default_str();
   sub->add_option("--max-linf", args->max_linf, "Linf stretch bound of every method")->capture_default_str();
+  sub->add_option("--atlas-aspect", args->atlas_aspect,
+                  "Width / height of the texture the external atlases were laid out for (default: "
+                  "read from each one's UVs)")
+      ->check(number_in(1.0 / 16384, 16384.0));
   sub->add_option("--pack-res", args->pack_res, "Texture size for the packing-ratio column")->capture_default_str();
   sub->add_option("--psnr-samples", args->psnr_samples, "Points per surface for the PSNR")
       ->check(CLI::Range(1000LL, 20'000'000LL))

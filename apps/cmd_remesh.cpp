@@ -49,6 +49,7 @@ struct RemeshArgs {
   std::string signal;
   std::string signal_use = "param";
   bool keep_chart_sizes = false;
+  double atlas_aspect = 0;  // 0: read from the atlas's UVs
   GivenOptions given;
 };
 
@@ -91,6 +92,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   if (a.given.has("--signal-use") && a.signal.empty()) bad_option("--signal-use goes with --signal");
   if (a.given.has("--fit-passes") && a.no_optimize) bad_option("--fit-passes does nothing with --no-optimize");
   if (a.given.has("--psnr-samples") && a.no_psnr) bad_option("--psnr-samples does nothing with --no-psnr");
+  if (a.atlas_aspect > 0 && a.atlas.empty()) bad_option("--atlas-aspect goes with --atlas");
   if (a.keep_chart_sizes && a.atlas.empty())
     bad_option("--keep-chart-sizes goes with --atlas (a signal atlas given as a file)");
   // A prefix that names a directory would write files called _64x64.png into it.
@@ -132,7 +134,8 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     if (!atlas.has_uvs())
       throw isochart::InputError(a.atlas, "the atlas has no texture coordinates (vt)");
     check_atlas_matches(input, atlas, a.atlas);
-    warn_texture_aspect(ctx, a.atlas, atlas, "its charts are packed at that width");
+    if (a.atlas_aspect == 0)
+      warn_texture_aspect(ctx, a.atlas, atlas, "its charts are packed at that shape (--atlas-aspect sets it)");
     {
       // The remesh is of the atlas's surface; one with a face missing or a seam left open
       // (a hole in a closed input) passes the size check above, so say so.
@@ -197,6 +200,8 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   lo.geometric_iterations = a.fit_passes;
   lo.fit_diagonals = !a.shorter_diagonals;
   lo.keep_chart_sizes = a.keep_chart_sizes || !a.signal.empty();
+  // An atlas built here is packed square; only a given one has a shape to read.
+  lo.atlas_aspect = a.atlas.empty() ? 1.0 : a.atlas_aspect;
   std::vector<std::array<int, 2>> sizes;
   nlohmann::json search;
   if (!a.levels.empty()) {
@@ -377,6 +382,10 @@ void add_remesh(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--signal-use", args->signal_use,
                   "With --signal: param (geometric charts, signal parameterization; default) or full "
                   "(signal charts too)");
+  sub->add_option("--atlas-aspect", args->atlas_aspect,
+                  "Width / height of the texture the --atlas was laid out for, so its charts are "
+                  "packed unsquashed (default: read from its UVs, which a stretched chart can mislead)")
+      ->check(number_in(1.0 / 16384, 16384.0));
   sub->add_flag("--keep-chart-sizes", args->keep_chart_sizes,
                 "Re-pack with the atlas's relative chart sizes instead of one texel density (for "
                 "signal-specialized atlases given with --atlas)");

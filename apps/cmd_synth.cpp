@@ -145,6 +145,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   mcgim::PyramidOptions po;
   po.sizes.clear();
   for (int r : a.levels) po.sizes.push_back({r, r});
+  po.level.atlas_aspect = 1;  // its own square atlas: nothing to read from the UVs
   std::vector<mcgim::Level> pyramid;
   try {
     pyramid = mcgim::build_pyramid(atlas, po, ctx.progress());

@@ -399,7 +399,7 @@ void optimize_atlas_stretch(const Mesh& mesh, Atlas& atlas, const OptimizeOption
   atlas.stats.seconds["total"] += since(t0);
 }
 
-Atlas atlas_from_uvs(const Mesh& mesh) {
+Atlas atlas_from_uvs(const Mesh& mesh, double texture_aspect) {
   if (!mesh.has_uvs()) throw InputError("", "the atlas has no texture coordinates (vt)");
   int nc = 0;
   const std::vector<int> chart = uv_charts(mesh, nc);
@@ -421,7 +421,9 @@ Atlas atlas_from_uvs(const Mesh& mesh) {
   }
   // Coordinates laid out for a W×H texture are W/H times too short along u for their surface:
   // packed, measured or optimized as they are, every chart would count as flattened.
-  const double aspect = detect_texture_aspect(mesh);
+  if (!(texture_aspect >= 0) || !std::isfinite(texture_aspect))
+    throw InputError("", "the texture aspect ratio of an atlas must be 0 (read from the UVs) or positive");
+  const double aspect = texture_aspect > 0 ? texture_aspect : detect_texture_aspect(mesh);
   if (aspect != 1.0)
     for (Vec2d& p : atlas.uvs) p.x *= aspect;
   std::vector<detail::AtlasChart> charts = detail::split_atlas_charts(mesh, atlas);

@@ -147,7 +147,10 @@ StretchStats measure_texture_stretch(const Mesh& mesh, double texture_aspect) {
 
 double detect_texture_aspect(const Mesh& mesh) {
   if (!mesh.has_uvs()) return 1.0;
-  double weight = 0, log_sum = 0;
+  int nc = 0;
+  const std::vector<int> chart = uv_charts(mesh, nc);
+  // Per chart, the area-weighted mean of log(|∂p/∂u| / |∂p/∂v|).
+  std::vector<double> weight(nc, 0.0), log_sum(nc, 0.0);
   for (int f = 0; f < mesh.num_faces(); ++f) {
     const Vec3d& q0 = mesh.positions[mesh.faces[f][0]];
     const Vec3d e1 = mesh.positions[mesh.faces[f][1]] - q0, e2 = mesh.positions[mesh.faces[f][2]] - q0;
@@ -158,13 +161,28 @@ double detect_texture_aspect(const Mesh& mesh) {
     if (!(std::abs(det) > 0) || !(area > 0)) continue;
     // The Jacobian's columns: the surface's rate of change along u and along v.
     const double su = norm((e1 * d2.y - e2 * d1.y) / det), sv = norm((e2 * d1.x - e1 * d2.x) / det);
-    if (!(su > 0) || !(sv > 0) || !std::isfinite(su / sv)) continue;
-    weight += area;
-    log_sum += area * std::log(su / sv);
+    const double l = std::log(su / sv);
+    if (!std::isfinite(l)) continue;
+    weight[chart[f]] += area;
+    log_sum[chart[f]] += area * l;
   }
-  if (!(weight > 0)) return 1.0;
-  const double aspect = std::exp(log_sum / weight);
-  return std::isfinite(aspect) && std::abs(std::log(aspect)) > std::log(1.2) ? aspect : 1.0;
+  double total = 0, sum = 0;
+  for (int c = 0; c < nc; ++c) total += weight[c], sum += log_sum[c];
+  if (!(total > 0)) return 1.0;
+  const double mean = sum / total;
+  // Charts that disagree (a square atlas with one chart stretched along u, beside undistorted
+  // ones) say nothing about the texture: on isocharts', UVAtlas's and xatlas's atlases the
+  // charts' RMS spread is within a factor 1.18, a stretched cylinder beside its caps 1.94.
+  double spread = 0;
+  for (int c = 0; c < nc; ++c)
+    if (weight[c] > 0) spread += weight[c] * std::pow(log_sum[c] / weight[c] - mean, 2);
+  if (std::sqrt(spread / total) > std::log(1.4)) return 1.0;
+  // Uneven stretch in charts of every orientation leaves a few percent of noise (a 2048×256
+  // atlas reads 7.80, a 4:1 signal atlas 4.26, xatlas's square horse 1.063); textures are
+  // nearly always a power of two times as wide as high, so within 10 % of one it is that.
+  const double k = std::round(mean / std::log(2.0));
+  if (std::abs(mean - k * std::log(2.0)) < std::log(1.1)) return std::ldexp(1.0, static_cast<int>(k));
+  return std::exp(mean);
 }
 
 StretchStats measure_stretch(const std::vector<Vec3d>& positions, const std::vector<Face>& faces,

@@ -519,7 +519,8 @@ Placement place_charts(const AtlasCharts& a, const LevelOptions& o, const std::v
     for (int c = 0; c < nc; ++c) {
       const Chart& ch = a.charts[c];
       pack[c].uv = ch.uv;
-      const double sx = ch.area_uv < 0 ? -a.uv_aspect : a.uv_aspect;
+      const double aspect = o.atlas_aspect > 0 ? o.atlas_aspect : a.uv_aspect;
+      const double sx = ch.area_uv < 0 ? -aspect : aspect;
       if (sx != 1.0)
         for (Vec2d& uv : pack[c].uv) uv.x *= sx;
       pack[c].faces = ch.local_faces;

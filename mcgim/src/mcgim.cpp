@@ -30,6 +30,7 @@ void check_options(const LevelOptions& o) {
     bad("geometry image size " + std::to_string(o.width) + "x" + std::to_string(o.height) +
         " is beyond 8192, the largest texture the packer handles");
   if (o.gutter < 1) bad("the gutter must be at least 1 texel");
+  if (!(o.atlas_aspect >= 0) || !std::isfinite(o.atlas_aspect)) bad("the atlas aspect must be 0 or positive");
   if (o.optimize_iterations < 0) bad("optimize_iterations must be >= 0");
   if (o.geometric_iterations < 0) bad("geometric_iterations must be >= 0");
   if (!(o.optimize_regularization > 0)) bad("optimize_regularization must be > 0");

@@ -272,18 +272,32 @@ TEST_CASE("the texture aspect an atlas was laid out for is read from its UVs", "
   LscmOptions o;
   const Atlas a = build_lscm_atlas(mesh, o);
   Mesh m = a.apply_to(mesh);
-  // A square texture's atlas reads as exactly 1 (its charts' scatter stays under 20 %).
+  // A square texture's atlas reads as exactly 1, powers of two exactly, other shapes as
+  // estimated.
   CHECK(detect_texture_aspect(m) == 1.0);
-  for (double aspect : {4.0, 2.0, 0.125}) {
+  for (double aspect : {4.0, 2.0, 0.125, 1.25, 0.75}) {
     Mesh squashed = m;
     for (Vec2d& p : squashed.uvs) p.x /= aspect;
     INFO(aspect);
-    CHECK(detect_texture_aspect(squashed) == Approx(aspect).epsilon(0.05));
+    if (aspect == 1.25 || aspect == 0.75)
+      CHECK(detect_texture_aspect(squashed) == Approx(aspect).epsilon(0.03));
+    else
+      CHECK(detect_texture_aspect(squashed) == aspect);
     // The charts read back from the file keep the square atlas's stretch.
     const Atlas e = atlas_from_uvs(squashed);
     const Atlas f = atlas_from_uvs(m);
     REQUIRE(e.num_charts() == f.num_charts());
     for (int c = 0; c < e.num_charts(); ++c) CHECK(e.charts[c].l2 == Approx(f.charts[c].l2).epsilon(0.02));
   }
+  // Half the charts stretched fourfold along u, the others not: the charts disagree, so it is
+  // a stretched square atlas, not a 2:1 texture's.
+  Mesh stretched = m;
+  std::vector<char> moved(stretched.uvs.size(), 0);
+  for (int f = 0; f < stretched.num_faces(); ++f)
+    if (a.face_chart[f] % 2 == 0)
+      for (int t : stretched.face_uvs[f])
+        if (!moved[t]) stretched.uvs[t].x *= 4, moved[t] = 1;
+  REQUIRE(a.num_charts() >= 2);
+  CHECK(detect_texture_aspect(stretched) == 1.0);
   CHECK(detect_texture_aspect(mesh) == 1.0);  // no UVs
 }

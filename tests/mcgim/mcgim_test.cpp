@@ -658,6 +658,34 @@ TEST_CASE("re-packing unsquashes an atlas laid out for a non-square texture", "[
     const double w = box[c][2] - box[c][0] + 1, h = box[c][3] - box[c][1] + 1;
     CHECK(std::max(w, h) / std::min(w, h) < 1.3);
   }
+  // Told the atlas is for a square texture, the re-packer takes the strips as they are: the
+  // sample grid is then 4 times as dense across each face one way as the other (singular
+  // values of the grid's 3D offsets to the right and up neighbours, whatever the rotation).
+  const auto anisotropy = [&](const Level& level) {
+    double sum = 0;
+    int n = 0;
+    for (int y = 0; y + 1 < o.height; ++y)
+      for (int x = 0; x + 1 < o.width; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * o.width + x;
+        const int c = level.image.chart[i];
+        if (c < 0 || level.image.chart[i + 1] != c || level.image.chart[i + o.width] != c) continue;
+        const isochart::Vec3d a = level.image.positions[i + 1] - level.image.positions[i];
+        const isochart::Vec3d b = level.image.positions[i + o.width] - level.image.positions[i];
+        const double aa = dot(a, a), bb = dot(b, b), ab = dot(a, b);
+        const double mean = 0.5 * (aa + bb), dev = std::sqrt(0.25 * (aa - bb) * (aa - bb) + ab * ab);
+        if (!(mean - dev > 0)) continue;
+        sum += std::sqrt((mean + dev) / (mean - dev));
+        ++n;
+      }
+    return n > 0 ? sum / n : 0.0;
+  };
+  CHECK(anisotropy(lv) < 1.2);
+  o.atlas_aspect = 1;
+  const Level strips = build_level(m, o);
+  check_watertight(strips, 2);
+  CHECK(anisotropy(strips) > 3);
+  o.atlas_aspect = -1;
+  CHECK_THROWS_AS(build_level(m, o), isochart::InputError);
 }
 
 TEST_CASE("a coarse level enlarges charts too small to keep the topology", "[mcgim]") {

@@ -57,10 +57,11 @@ void optimize_atlas_stretch(const Mesh& mesh, Atlas& atlas, const OptimizeOption
 /// OBJ with `vt`) into an Atlas of `mesh`'s faces: charts are the edge-connected pieces with
 /// continuous texture coordinates (isochart::uv_charts). A chart laid out mirrored (negative
 /// total signed UV area; UVAtlas writes v flipped) is mirrored back so that stretch counts no
-/// flips; packers may mirror freely. UVs laid out for a non-square texture
-/// (detect_texture_aspect) are first scaled along u to square texels. Not packed: call pack_atlas.
+/// flips; packers may mirror freely. UVs laid out for a texture `texture_aspect` times as wide
+/// as high (0: detect_texture_aspect reads it from the UVs) are first scaled along u to square
+/// texels. Not packed: call pack_atlas.
 /// \throw InputError when the mesh has no texture coordinates or a chart has zero UV area.
-Atlas atlas_from_uvs(const Mesh& mesh);
+Atlas atlas_from_uvs(const Mesh& mesh, double texture_aspect = 0);
 
 /// A topological-disk check of one chart as MCGIM sampling needs it: one edge-connected,
 /// edge- and vertex-manifold component with exactly one boundary loop and Euler

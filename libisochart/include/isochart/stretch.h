@@ -47,9 +47,10 @@ StretchStats measure_texture_stretch(const Mesh& mesh, double texture_aspect);
 /// The width / height of the texture a mesh's UVs were laid out for, read from the UVs
 /// themselves (a file's [0,1]² coordinates do not say): the area-weighted geometric mean over
 /// the faces of |∂p/∂u| / |∂p/∂v|, which is W/H for charts laid out without stretch in texels.
-/// Charts in every orientation with uneven stretch scatter it by a few percent on square
-/// textures (UVAtlas and xatlas atlases: 1.003–1.063), so an estimate within 20 % of 1 returns
-/// exactly 1. Also 1 for a mesh without UVs or without a face of positive area.
+/// Uneven stretch in charts of every orientation scatters it by a few percent, so an estimate
+/// within 10 % of a power of two (1 included) returns that power exactly. Returns 1 when the
+/// charts disagree (their per-chart estimates spread by more than a factor 1.4: a stretched
+/// chart, not the texture), for a mesh without UVs and without a face of positive area.
 double detect_texture_aspect(const Mesh& mesh);
 
 /// Same with per-vertex UVs (one UV per mesh vertex, as for a single chart).

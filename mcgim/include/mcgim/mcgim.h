@@ -33,6 +33,9 @@ struct LevelOptions {
   /// For signal-specialized atlases, whose packing gives charts with more signal variation
   /// more texels (Iso-charts §7): the samples follow the signal, not just the area.
   bool keep_chart_sizes = false;
+  /// Width / height of the texture the atlas's UVs were laid out for, so that re-packing
+  /// scales u by it; 0 reads it from the UVs (isochart::detect_texture_aspect).
+  double atlas_aspect = 0;
   /// Move the samples (welded groups together) towards the original surface after
   /// zippering (Sander et al. 2003's final optimization): least-squares fits of the
   /// reconstructed surface to points of the original surface, with a pull towards the sampled
