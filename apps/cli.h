@@ -196,8 +196,8 @@ inline void check_signal_uvs(const std::string& signal, const isochart::LoadResu
                              const std::string& file) {
   if (signal.rfind("texture:", 0) == 0 && r.report.faces_without_uvs > 0)
     throw isochart::InputError(file, std::to_string(r.report.faces_without_uvs) +
-                                         " faces have no texture coordinates to read --signal " + signal +
-                                         " through");
+                                         (r.report.faces_without_uvs == 1 ? " face has" : " faces have") +
+                                         " no texture coordinates to read --signal " + signal + " through");
 }
 
 /// The image of a `texture:IMG` signal (an input of the run), else "".

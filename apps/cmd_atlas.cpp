@@ -90,9 +90,14 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     }
   }();
   const isochart::Mesh out_mesh = atlas.apply_to(in.mesh);
+  // The SAE's texture has the atlas's shape and about --sae-res² texels: a 4:1 atlas baked into a
+  // square texture measured twice the SAE of the same charts packed square.
+  const double aspect = static_cast<double>(a.options.pack.width) / a.options.pack.height;
+  const int sae_w = std::clamp(static_cast<int>(std::lround(a.sae_res * std::sqrt(aspect))), 1, 8192);
+  const int sae_h = std::clamp(static_cast<int>(std::lround(a.sae_res / std::sqrt(aspect))), 1, 8192);
   if (!a.signal.empty()) {
     isochart::Image baked;
-    sae = isochart::signal_approximation_error(out_mesh, signal, a.sae_res, a.sae_res,
+    sae = isochart::signal_approximation_error(out_mesh, signal, sae_w, sae_h,
                                                a.signal_texture_out.empty() ? nullptr : &baked);
     if (!a.signal_texture_out.empty()) {
       if (a.signal == "normals")
@@ -104,7 +109,6 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   for (const auto& out : a.outputs) isochart::save_mesh(out_mesh, out);
   if (!a.png.empty()) {
     // The picture has the texture's proportions, its longer side --png-size pixels.
-    const double aspect = static_cast<double>(a.options.pack.width) / a.options.pack.height;
     const auto [pw, ph] = layout_size(a.png_size, aspect);
     isochart::write_image(a.png, isochart::render_uv_layout(out_mesh, pw, ph, aspect));
   }
@@ -189,6 +193,8 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
                    {"metric_l2", finite_or_null(sig_stats.metric_l2)},
                    {"reverted_charts", sig_stats.reverted_charts},
                    {"sae_res", a.sae_res},
+                   {"sae_width", sae_w},
+                   {"sae_height", sae_h},
                    {"sae", sae.sae},
                    {"signal_rms", sae.signal_rms}};
     j["sae"] = sae.sae;
@@ -215,7 +221,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     << "  seconds           " << secs["total"].get<double>() << "\n";
   if (!a.signal.empty())
     t << "  signal " << a.signal << " (" << a.signal_use << "): signal stretch " << sig_stats.signal_stretch
-      << ", SAE " << sae.sae << " at " << a.sae_res << "x" << a.sae_res << "\n";
+      << ", SAE " << sae.sae << " at " << sae_w << "x" << sae_h << "\n";
   for (const auto& out : a.outputs) t << "  wrote " << out << "\n";
   if (!a.png.empty()) t << "  wrote " << a.png << "\n";
   ctx.emit(j, t.str());
@@ -275,7 +281,9 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
                   "Geometric L2 stretch bound kept by signal charts")
       ->capture_default_str();
   // The same limit as sae's --res: 8192² takes 1.5 GB, 16384² took 6.3 GB.
-  sub->add_option("--sae-res", args->sae_res, "Texture size at which the SAE is reported")
+  sub->add_option("--sae-res", args->sae_res,
+                  "Texture size at which the SAE is reported (about this many texels squared, in the "
+                  "--width:--height shape)")
       ->check(CLI::Range(1, 8192))
       ->capture_default_str();
   sub->add_option("--imt-out", args->imt_out, "Write the per-face IMT (g00 g01 g11 per line)");

@@ -248,7 +248,8 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
       raw.uvs.push_back({0, 0});
       for (std::size_t f = 0; f < polygon_uvs.size(); ++f)
         if (polygon_uvs[f].empty()) polygon_uvs[f].assign(raw.polygons[f].size(), zero);
-      raw.warnings.push_back(std::to_string(missing) + " faces have no texture coordinates; they get (0, 0)");
+      raw.warnings.push_back(std::to_string(missing) + (missing == 1 ? " face has" : " faces have") +
+                             " no texture coordinates; they get (0, 0)");
       raw.faces_without_uvs = missing;
     }
     raw.polygon_uvs = std::move(polygon_uvs);

@@ -276,7 +276,7 @@ TEST_CASE("OBJ: faces without texture coordinates next to faces with them get (0
       d.write("c.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvt 0.5 0.5\nf 1/1 3/1 2/1\nf 1 2 4\n"));
   REQUIRE(raw.polygon_uvs.size() == 2);
   CHECK(raw.uvs[raw.polygon_uvs[1][0]] == Vec2d{0, 0});
-  CHECK_THAT(raw.warnings.at(0), Catch::Contains("1 faces have no texture coordinates"));
+  CHECK_THAT(raw.warnings.at(0), Catch::Contains("1 face has no texture coordinates"));
 }
 
 TEST_CASE("OBJ: parse errors name the line", "[io]") {
