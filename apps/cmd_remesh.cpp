@@ -135,7 +135,8 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
       throw isochart::InputError(a.atlas, "the atlas has no texture coordinates (vt)");
     check_atlas_matches(input, atlas, a.atlas);
     if (a.atlas_aspect == 0)
-      warn_texture_aspect(ctx, a.atlas, atlas, "its charts are packed at that shape (--atlas-aspect sets it)");
+      warn_texture_aspect(ctx, a.atlas, atlas,
+                          "its charts are packed at that shape (--atlas-aspect sets it)");
     {
       // The remesh is of the atlas's surface; one with a face missing or a seam left open
       // (a hole in a closed input) passes the size check above, so say so.

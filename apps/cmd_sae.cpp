@@ -54,18 +54,19 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
     const isochart::AtlasQuality q = isochart::measure_atlas(mesh);
     warn_uvs_outside(ctx, a.input, q, "they are clamped to the texture's edge");
     // An 8:1 atlas baked into a square texture reads as twice the signal stretch it has.
-    const double detected = isochart::detect_texture_aspect(mesh), given = static_cast<double>(width) / height;
+    const double detected = isochart::detect_texture_aspect(mesh),
+                 given = static_cast<double>(width) / height;
     if (std::abs(std::log(detected / given)) > std::log(1.1))
       ctx.warn(a.input, "the texture coordinates look laid out for " + describe_texture_aspect(detected) +
-                            "; the texture measured is " + std::to_string(width) + "x" + std::to_string(height));
+                            "; the texture measured is " + std::to_string(width) + "x" +
+                            std::to_string(height));
     if (q.overlapping_pairs > 0)
       ctx.warn(a.input, std::to_string(q.overlapping_pairs) +
                             " pairs of triangles overlap in UV; they share texels, which raises the SAE");
     if (q.stretch.degenerate > 0)
-      ctx.warn(a.input,
-               std::to_string(q.stretch.degenerate) +
-                   (q.stretch.degenerate == 1 ? " triangle has" : " triangles have") +
-                   " zero area in UV; they get no texels");
+      ctx.warn(a.input, std::to_string(q.stretch.degenerate) +
+                            (q.stretch.degenerate == 1 ? " triangle has" : " triangles have") +
+                            " zero area in UV; they get no texels");
   }
   // The signal lives on the source mesh (the atlas's mesh, perhaps numbered otherwise) when one is given:
   // e.g. its vertex colours, or a texture through its original texture coordinates.
@@ -209,8 +210,10 @@ void add_sae(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(1, 8192))
       ->capture_default_str();
   // 8192² takes 1.5 GB, 16384² 6 GB.
-  sub->add_option("--width", args->width, "Texture width (with --height, instead of --res)")->check(CLI::Range(1, 8192));
-  sub->add_option("--height", args->height, "Texture height (with --width, instead of --res)")->check(CLI::Range(1, 8192));
+  sub->add_option("--width", args->width, "Texture width (with --height, instead of --res)")
+      ->check(CLI::Range(1, 8192));
+  sub->add_option("--height", args->height, "Texture height (with --width, instead of --res)")
+      ->check(CLI::Range(1, 8192));
   sub->add_option("--texture-out", args->texture_out, "Write the baked signal texture (normals as 0.5n+0.5)");
   sub->add_option("--imt-out", args->imt_out, "Write the per-face IMT (g00 g01 g11 per line)");
   sub->footer("Example: isocharts sae bunny_atlas.obj --signal normals --res 256 --json");

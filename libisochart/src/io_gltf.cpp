@@ -363,7 +363,8 @@ class GltfReader {
       raw_.uvs.push_back({0, 0});
       for (auto& puv : raw_.polygon_uvs)
         if (puv.empty()) puv.assign(3, zero);
-      raw_.warnings.push_back(std::to_string(nf - with_uvs_) + (nf - with_uvs_ == 1 ? " face has" : " faces have") +
+      raw_.warnings.push_back(std::to_string(nf - with_uvs_) +
+                              (nf - with_uvs_ == 1 ? " face has" : " faces have") +
                               " no TEXCOORD_0; they get (0, 0)");
     }
     if (second_uvs_only_ > 0)

@@ -427,7 +427,8 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --psnr-samples does nothing with --no-psnr\n"));
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --signal-use full", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --signal-use goes with --signal\n"));
-  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --atlas-aspect 2", err) == 2);
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --atlas-aspect 2", err) ==
+        2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --atlas-aspect goes with --atlas\n"));
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --aspect 2", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect goes with --uv-layout\n"));

@@ -469,8 +469,8 @@ TEST_CASE("isocharts sae reports the field sae", "[signal]") {
   CHECK(squashed > 1.5);
   // Measured square, the 8:1 atlas is named; a lone --width (read with --res's height) refused.
   auto stderr_of = [&](const std::string& args) {
-    const std::string c = "\"" + std::string(ISOCHARTS_CLI) + "\" sae " + dir + "/wide.obj --signal normals " +
-                          args + " > /dev/null 2> " + dir + "/err.txt";
+    const std::string c = "\"" + std::string(ISOCHARTS_CLI) + "\" sae " + dir +
+                          "/wide.obj --signal normals " + args + " > /dev/null 2> " + dir + "/err.txt";
     const int code = std::system(c.c_str());
     std::ifstream f(dir + "/err.txt");
     std::stringstream t;
@@ -479,13 +479,15 @@ TEST_CASE("isocharts sae reports the field sae", "[signal]") {
   };
   auto [square_rc, square_err] = stderr_of("--res 64");
   CHECK(square_rc == 0);
-  CHECK(square_err.find("look laid out for a texture 8 times as wide as high; the texture measured is 64x64") !=
-        std::string::npos);
+  CHECK(
+      square_err.find("look laid out for a texture 8 times as wide as high; the texture measured is 64x64") !=
+      std::string::npos);
   CHECK(stderr_of("--width 512 --height 64").second.find("look laid out") == std::string::npos);
   {
     // atlas --signal bakes its SAE texture in the atlas's shape (it was --sae-res square).
-    const std::string c = "\"" + std::string(ISOCHARTS_CLI) + "\" -q --json atlas builtin:face --signal normals -o " +
-                          dir + "/ws.obj --width 512 --height 64 --sae-res 64 > " + dir + "/ws.json";
+    const std::string c = "\"" + std::string(ISOCHARTS_CLI) +
+                          "\" -q --json atlas builtin:face --signal normals -o " + dir +
+                          "/ws.obj --width 512 --height 64 --sae-res 64 > " + dir + "/ws.json";
     REQUIRE(std::system(c.c_str()) == 0);
     std::ifstream f(dir + "/ws.json");
     std::stringstream t;
