@@ -64,17 +64,27 @@ void run_render(const Context& ctx, const RenderArgs& a) {
     if (ext == ".jpg" || ext == ".jpeg") bad_option("--transparent needs an image with alpha (.png, .exr, .tif), not JPEG");
   }
   if (a.aspect > 0 && !a.uv_layout) bad_option("--aspect goes with --uv-layout");
-  const double aspect = a.aspect > 0 ? a.aspect : 1.0;
-  // A layout picture defaults to the texture's proportions, its longer side 1024.
-  const auto [layout_w, layout_h] = layout_size(1024, aspect);
-  const int width = a.width > 0 ? a.width : (a.uv_layout ? layout_w : 400 * a.views);
-  const int height = a.height > 0 ? a.height : (a.uv_layout ? layout_h : 400);
+  double aspect = a.aspect > 0 ? a.aspect : 1.0;
+  // A layout picture defaults to the texture's proportions, its longer side 1024; one side
+  // given, the other follows the proportions (--aspect 8 --width 100 drew a band in 100x128).
+  const auto picture_size = [&](double texture_aspect) -> std::array<int, 2> {
+    if (!a.uv_layout) return {a.width > 0 ? a.width : 400 * a.views, a.height > 0 ? a.height : 400};
+    if (a.width > 0 && a.height > 0) return {a.width, a.height};
+    if (a.width > 0) return {a.width, std::max(16, static_cast<int>(std::lround(a.width / texture_aspect)))};
+    if (a.height > 0)
+      return {std::max(16, static_cast<int>(std::lround(a.height * texture_aspect))), a.height};
+    return layout_size(1024, texture_aspect);
+  };
   const int ss = a.uv_layout ? isochart::kUvLayoutSupersample : a.supersample;
-  if (static_cast<long long>(width) * height * ss * ss > (1LL << 25))
-    bad_option(
-        "--width/--height/--supersample: " + std::to_string(width) + "x" + std::to_string(height) +
-        " pixels at supersample " + std::to_string(ss) +
-        " is too large to render (width x height x supersample² at most 33554432, e.g. 4096x2048 at 2)");
+  const auto check_size = [&](int w, int h) {
+    if (static_cast<long long>(w) * h * ss * ss > (1LL << 25))
+      bad_option(
+          "--width/--height/--supersample: " + std::to_string(w) + "x" + std::to_string(h) +
+          " pixels at supersample " + std::to_string(ss) +
+          " is too large to render (width x height x supersample² at most 33554432, e.g. 4096x2048 at 2)");
+  };
+  auto [width, height] = picture_size(aspect);
+  check_size(width, height);
   if (!a.uv_layout && width < a.views)
     bad_option("--width " + std::to_string(width) + " is too small for " + std::to_string(a.views) +
                " views");
@@ -97,6 +107,18 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   isochart::Image image;
   std::string mode;
   if (a.uv_layout) {
+    // Without --aspect, a layout made for a non-square texture is drawn in that shape.
+    if (a.aspect <= 0 && mesh.has_uvs()) {
+      const double detected = isochart::detect_texture_aspect(mesh);
+      if (detected != 1.0) {
+        warn_texture_aspect(ctx, a.input, mesh, "drawn in that shape (--aspect sets it)");
+        aspect = detected;
+        const std::array<int, 2> size = picture_size(aspect);
+        width = size[0];
+        height = size[1];
+        check_size(width, height);
+      }
+    }
     image = for_input([&] { return isochart::render_uv_layout(mesh, width, height, aspect); });
     mode = "uv-layout";
   } else {
@@ -154,7 +176,7 @@ void add_render(CLI::App& app, Context& ctx, Action& action) {
   sub->add_flag("--uv-layout", args->uv_layout, "Draw the atlas in texture space instead of 3D views");
   sub->add_option("--aspect", args->aspect,
                   "With --uv-layout: width / height of the texture the UVs address, so the layout is drawn "
-                  "as the texture looks (default 1)")
+                  "as the texture looks (default: read from the UVs)")
       ->check(number_in(1.0 / 16384, 16384.0));
   sub->add_option("--views", args->views,
                   "Number of views side by side: front, right, back, left, top, bottom, "

@@ -925,6 +925,19 @@ TEST_CASE("stats says when the UVs were laid out for another texture shape", "[c
   CHECK(run_cli("stats '" + wide.string() + "' --aspect 0.25", err) == 0);
   CHECK_THAT(read_bytes(err),
              Catch::Contains("4 times as wide as high; stretch is measured for --aspect 0.25"));
+  // render --uv-layout draws it in that shape by default; one side given, the other follows.
+  const fs::path out = tmp.path / "out.txt";
+  CHECK(run_cli("--report '" + out.string() + "' render '" + wide.string() + "' --uv-layout -o '" +
+                    (tmp.path / "l.png").string() + "'",
+                err) == 0);
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("4 times as wide as high; drawn in that shape (--aspect sets it)"));
+  CHECK_THAT(read_bytes(out), Catch::Contains("\"height\": 256") && Catch::Contains("\"width\": 1024"));
+  CHECK(run_cli("--report '" + out.string() + "' render '" + wide.string() +
+                    "' --uv-layout --aspect 8 --width 400 -o '" + (tmp.path / "l.png").string() + "'",
+                err) == 0);
+  CHECK(read_bytes(err).find("look laid out") == std::string::npos);
+  CHECK_THAT(read_bytes(out), Catch::Contains("\"height\": 50") && Catch::Contains("\"width\": 400"));
 }
 
 TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
