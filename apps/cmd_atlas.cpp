@@ -133,6 +133,11 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   // square texture it fills a sliver of it (a 1000:1 strip packed at 0.002). The texture's own
   // shape is the remedy, and the user may not think of it. A chart's length over its width is
   // about its extent squared over its area, whatever way it was turned in packing.
+  // The packing ratio is of the charts' bounding box; in a texture much longer than that box
+  // (a few charts in 8:1) most of the texture stays empty, which only the covered share says.
+  double coverage = 0;
+  for (const isochart::Face& t : atlas.face_uvs)
+    coverage += std::abs(isochart::signed_area(atlas.uvs[t[0]], atlas.uvs[t[1]], atlas.uvs[t[2]]));
   if (s.packing_ratio < 0.25 && atlas.num_charts() > 0) {
     const int nc = atlas.num_charts();
     std::vector<isochart::Vec2d> lo(nc, {1e300, 1e300}), hi(nc, {-1e300, -1e300});
@@ -154,9 +159,10 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     const double elongation = area[big] > 0 ? (dx * dx + dy * dy) / area[big] : 0;
     if (elongation > 16) {
       std::ostringstream m;
-      m << "the charts fill " << std::setprecision(2) << 100 * s.packing_ratio
+      m << "the charts fill " << std::setprecision(2) << 100 * coverage
         << " % of the texture: the largest is about " << std::lround(elongation)
-        << " times longer than wide; a texture of its shape (--width/--height) holds it at a higher resolution";
+        << " times longer than wide; a texture of its shape (--width/--height) holds it at a higher "
+           "resolution";
       ctx.warn(a.input, m.str());
     }
   }
@@ -171,6 +177,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   j["l2_stretch"] = finite_or_null(s.l2);
   j["linf_stretch"] = finite_or_null(s.linf);
   j["packing_ratio"] = s.packing_ratio;
+  j["texture_coverage"] = coverage;
   j["flipped"] = s.flipped;
   j["overlapping_pairs"] = s.overlapping_pairs;
   j["bounds_met"] = bounds_met;
@@ -216,7 +223,10 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     << "  L2 stretch        " << s.l2 << "  (bound " << l2_bound << (a.signal.empty() ? "" : ", geometric")
     << ")\n"
     << "  Linf stretch      " << s.linf << "  (bound " << a.options.max_linf << ")\n"
-    << "  packing ratio     " << s.packing_ratio << "\n"
+    << "  packing ratio     " << s.packing_ratio;
+  if (coverage < 0.9 * s.packing_ratio)
+    t << "  (of the charts' bounding box; texture covered " << coverage << ")";
+  t << "\n"
     << "  flipped / overlapping pairs  " << s.flipped << " / " << s.overlapping_pairs << "\n"
     << "  seconds           " << secs["total"].get<double>() << "\n";
   if (!a.signal.empty())

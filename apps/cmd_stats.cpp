@@ -71,7 +71,11 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
     << "  zero-area in UV     " << q.stretch.degenerate << "\n"
     << "  mirrored charts     " << q.mirrored_charts << "\n"
     << "  overlapping pairs   " << q.overlapping_pairs << "\n"
-    << "  packing ratio       " << q.packing_ratio << "\n"
+    << "  packing ratio       " << q.packing_ratio
+    << (q.uv_area < 0.9 * q.packing_ratio
+            ? "  (of the charts' bounding box; texture covered " + std::to_string(q.uv_area) + ")"
+            : std::string())
+    << "\n"
     << "  seam length         " << q.seam_length << " (" << q.seam_length_relative << " x sqrt(area))\n";
   ctx.emit(j, t.str());
 }

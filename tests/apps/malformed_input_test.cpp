@@ -938,6 +938,14 @@ TEST_CASE("stats says when the UVs were laid out for another texture shape", "[c
                 err) == 0);
   CHECK(read_bytes(err).find("look laid out") == std::string::npos);
   CHECK_THAT(read_bytes(out), Catch::Contains("\"height\": 50") && Catch::Contains("\"width\": 400"));
+  // A square chart packed in an 8:1 texture: a packing ratio near 1 (its own box) but an eighth
+  // of the texture covered, which the report now says.
+  CHECK(run_cli("--report '" + out.string() + "' atlas '" + wide.string() + "' -o '" +
+                    (tmp.path / "a.obj").string() + "' --width 1024 --height 128",
+                err) == 0);
+  const nlohmann::json report = nlohmann::json::parse(read_bytes(out));
+  CHECK(report.at("packing_ratio").get<double>() > 0.8);
+  CHECK(report.at("texture_coverage").get<double>() < 0.15);
 }
 
 TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
