@@ -307,6 +307,14 @@ class Bench {
     const mcgim::DistanceResult d = mcgim::measure_distance(b.geometry, lv.remesh.mesh, dopt, ctx_.progress());
     r.psnr = d.psnr;
     r.s_psnr = d.seconds;
+    // A blank stretch cell needs its reason (one turned triangle of thousands makes it infinite).
+    if (!std::isfinite(r.l2)) {
+      const std::string why = std::to_string(at.stats.flipped) +
+                              (at.stats.flipped == 1 ? " UV triangle flipped or collapsed"
+                                                     : " UV triangles flipped or collapsed") +
+                              ": stretch infinite";
+      r.note = r.note.empty() ? why : r.note + "; " + why;
+    }
   }
 
   void line(const Row& r, int k, int n) const {

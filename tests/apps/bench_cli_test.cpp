@@ -223,6 +223,26 @@ TEST_CASE("bench: an external atlas of another surface is an n/a row", "[bench]"
   CHECK(rows[1].at("psnr_db").empty());
 }
 
+TEST_CASE("bench: an atlas with a flipped triangle says why its stretch cells are blank", "[bench]") {
+  const fs::path dir = fresh_dir("flipped_atlas");
+  const fs::path mesh = dir / "quad.obj", flip = dir / "flip.obj", out = dir / "out",
+                 err = dir / "stderr.txt";
+  const std::string geometry = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 0\n";
+  std::ofstream(mesh) << geometry << "f 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n";
+  // The centre's vt below the bottom edge's: the bottom triangle turns over.
+  std::ofstream(flip) << geometry
+                      << "vt 0.1 0.1\nvt 0.9 0.1\nvt 0.9 0.9\nvt 0.1 0.9\nvt 0.5 0.08\n"
+                         "f 1/1 2/2 5/5\nf 2/2 3/3 5/5\nf 3/3 4/4 5/5\nf 4/4 1/1 5/5\n";
+  REQUIRE(run_cli("bench '" + mesh.string() + "' --methods isochart,external:'" + flip.string() +
+                      "' --res 16 --psnr-samples 2000 --sweep none --no-plots --out '" + out.string() + "'",
+                  err) == 0);
+  const auto rows = read_csv(out / "bench.csv");
+  REQUIRE(rows.size() == 2);
+  CHECK(rows[1].at("l2").empty());
+  CHECK_THAT(rows[1].at("note"), Catch::Contains("1 UV triangle flipped or collapsed: stretch infinite"));
+  CHECK(rows[0].at("note").find("stretch infinite") == std::string::npos);
+}
+
 TEST_CASE("bench: only external methods and no baseline atlas for the mesh: an n/a row saying so", "[bench]") {
   const fs::path dir = fresh_dir("no_baseline");
   const fs::path out = dir / "out", err = dir / "stderr.txt";
