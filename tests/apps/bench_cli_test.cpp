@@ -75,6 +75,20 @@ std::vector<std::map<std::string, std::string>> read_csv(const fs::path& p) {
   return rows;
 }
 
+// bench MESH --methods isochart,external:ATLAS at 16², its two rows.
+std::vector<std::map<std::string, std::string>> bench_against(const fs::path& mesh, const fs::path& atlas,
+                                                              const fs::path& dir) {
+  const fs::path out = dir / "out", err = dir / "stderr.txt";
+  const int rc =
+      run_cli("bench '" + mesh.string() + "' --methods isochart,external:'" + atlas.string() +
+                  "' --res 16 --psnr-samples 2000 --sweep none --no-plots --out '" + out.string() + "'",
+              err);
+  REQUIRE(rc == 0);
+  auto rows = read_csv(out / "bench.csv");
+  REQUIRE(rows.size() == 2);
+  return rows;
+}
+
 int count_lines(const std::string& s) {
   int n = 0;
   for (char c : s) n += c == '\n';
@@ -207,17 +221,12 @@ TEST_CASE("bench: an external atlas of another surface is an n/a row", "[bench]"
   // Moved by half its size: the same face count, so it was benched, and its remesh measured
   // against its own geometry scored like an atlas of this mesh.
   const fs::path dir = fresh_dir("moved_atlas");
-  const fs::path mesh = dir / "quad.obj", moved = dir / "moved.obj", out = dir / "out",
-                 err = dir / "stderr.txt";
+  const fs::path mesh = dir / "quad.obj", moved = dir / "moved.obj";
   std::ofstream(mesh) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n";
   std::ofstream(moved)
       << "v 0.5 0 0\nv 1.5 0 0\nv 1.5 1 0\nv 0.5 1 0\nvt 0.1 0.1\nvt 0.9 0.1\nvt 0.9 0.9\nvt 0.1 "
          "0.9\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
-  REQUIRE(run_cli("bench '" + mesh.string() + "' --methods isochart,external:'" + moved.string() +
-                      "' --res 16 --psnr-samples 2000 --sweep none --no-plots --out '" + out.string() + "'",
-                  err) == 0);
-  const auto rows = read_csv(out / "bench.csv");
-  REQUIRE(rows.size() == 2);
+  const auto rows = bench_against(mesh, moved, dir);
   CHECK(rows[1].at("method") == "external:moved");
   CHECK(rows[1].at("note").rfind("n/a: the atlas is not of the input mesh", 0) == 0);
   CHECK(rows[1].at("psnr_db").empty());
@@ -225,19 +234,14 @@ TEST_CASE("bench: an external atlas of another surface is an n/a row", "[bench]"
 
 TEST_CASE("bench: an atlas with a flipped triangle says why its stretch cells are blank", "[bench]") {
   const fs::path dir = fresh_dir("flipped_atlas");
-  const fs::path mesh = dir / "quad.obj", flip = dir / "flip.obj", out = dir / "out",
-                 err = dir / "stderr.txt";
+  const fs::path mesh = dir / "quad.obj", flip = dir / "flip.obj";
   const std::string geometry = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 0\n";
   std::ofstream(mesh) << geometry << "f 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n";
   // The centre's vt below the bottom edge's: the bottom triangle turns over.
   std::ofstream(flip) << geometry
                       << "vt 0.1 0.1\nvt 0.9 0.1\nvt 0.9 0.9\nvt 0.1 0.9\nvt 0.5 0.08\n"
                          "f 1/1 2/2 5/5\nf 2/2 3/3 5/5\nf 3/3 4/4 5/5\nf 4/4 1/1 5/5\n";
-  REQUIRE(run_cli("bench '" + mesh.string() + "' --methods isochart,external:'" + flip.string() +
-                      "' --res 16 --psnr-samples 2000 --sweep none --no-plots --out '" + out.string() + "'",
-                  err) == 0);
-  const auto rows = read_csv(out / "bench.csv");
-  REQUIRE(rows.size() == 2);
+  const auto rows = bench_against(mesh, flip, dir);
   CHECK(rows[1].at("l2").empty());
   CHECK_THAT(rows[1].at("note"), Catch::Contains("1 UV triangle flipped or collapsed: stretch infinite"));
   CHECK(rows[0].at("note").find("stretch infinite") == std::string::npos);
