@@ -93,6 +93,16 @@ inline const CLI::Validator non_negative{[](std::string& v) {
                                          },
                                          "NON-NEGATIVE"};
 
+/// `x` in fixed notation without trailing zeros ("0.000061", "16384").
+inline std::string plain_number(double x) {
+  std::string t = std::to_string(x);
+  if (t.find('.') != std::string::npos) {
+    while (t.back() == '0') t.pop_back();
+    if (t.back() == '.') t.pop_back();
+  }
+  return t;
+}
+
 /// A number in [lo, hi]. CLI::Range compares with < and >, so "nan" passed it.
 inline CLI::Validator number_in(double lo, double hi) {
   return CLI::Validator(
@@ -106,8 +116,9 @@ inline CLI::Validator number_in(double lo, double hi) {
         // CLI::Range's wording, which Context rewrites for every range alike.
         return "Value " + v + " not in range " + std::to_string(lo) + " to " + std::to_string(hi);
       },
-      // The help's wording of CLI::Range.
-      "FLOAT in [" + CLI::detail::to_string(lo) + " - " + CLI::detail::to_string(hi) + "]");
+      // The help's wording of CLI::Range, with the bounds written as the error writes them
+      // (0.000061, not 6.10352e-05).
+      "FLOAT in [" + plain_number(lo) + " - " + plain_number(hi) + "]");
 }
 
 /// A seed: 0 .. 2^64 − 1 in decimal. CLI11 would take "-1" or a 30-digit number silently

@@ -416,6 +416,13 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Contains("r.json: cannot write: directory"));
   CHECK(run_cli("stats builtin:sphere --aspect 0", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect: expected a number from 0.000061 to 16384, got '0'\n"));
+  {
+    // The help writes the range as the error does (it said 6.10352e-05).
+    const fs::path help = tmp.path / "help.txt";
+    CHECK(run_cli("stats --help | tee '" + help.string() + "'", err) == 0);
+    CHECK_THAT(read_bytes(help), Catch::Contains("--aspect FLOAT:FLOAT in [0.000061 - 16384]"));
+    fs::remove(help);  // the checks below count what a failing command leaves behind
+  }
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --width 4096 --height 4096", err) ==
         2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --width/--height/--supersample: 4096x4096 pixels"));
