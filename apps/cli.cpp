@@ -77,8 +77,12 @@ void Context::check_paths(const std::vector<std::string>& inputs, std::vector<st
 
 void Context::warn(const std::string& file, const std::string& message) const {
   {
+    // Once per run: a file given twice (the input and its --atlas) is loaded, and warned
+    // about, twice.
     std::lock_guard<std::mutex> lock(warnings->mutex);
-    warnings->list.push_back((file.empty() ? "" : file + ": ") + message);
+    const std::string line = (file.empty() ? "" : file + ": ") + message;
+    if (std::find(warnings->list.begin(), warnings->list.end(), line) != warnings->list.end()) return;
+    warnings->list.push_back(line);
   }
   if (opts.quiet) return;
   end_progress();

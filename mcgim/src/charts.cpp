@@ -24,8 +24,10 @@ using isochart::Error;
 using isochart::InputError;
 
 std::string describe(int c, const Chart& ch) {
-  return "atlas chart " + std::to_string(c) + " (" + std::to_string(ch.faces.size()) +
-         " faces, first face " + std::to_string(ch.faces.front()) + ")";
+  if (ch.faces.size() == 1)
+    return "atlas chart " + std::to_string(c) + " (face " + std::to_string(ch.faces.front()) + ")";
+  return "atlas chart " + std::to_string(c) + " (" + std::to_string(ch.faces.size()) + " faces, first face " +
+         std::to_string(ch.faces.front()) + ")";
 }
 
 const Vec2d& corner_uv(const Mesh& m, int f, int k) { return m.uvs[m.face_uvs[f][k]]; }

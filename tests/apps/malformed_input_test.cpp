@@ -916,6 +916,24 @@ TEST_CASE("stats says when its packing ratio is not of the texture", "[cli]") {
              Catch::Contains("overlapping triangle pairs: the packing ratio counts their UV area twice"));
 }
 
+TEST_CASE("a file given twice in one run is warned about once", "[cli]") {
+  // The input and its --atlas are the same file: it is loaded twice, and its warning was
+  // printed twice.
+  TempDir tmp("warn_once");
+  const fs::path err = tmp.path / "err.txt", partial = tmp.path / "partial.obj";
+  std::ofstream(partial)
+      << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nf 1/1 2/2 3/3\nf 1 3 4\n";
+  CHECK(run_cli("remesh '" + partial.string() + "' --atlas '" + partial.string() + "' -o '" +
+                    (tmp.path / "r.ply").string() + "' --res 16",
+                err) == 2);
+  const std::string text = read_bytes(err);
+  const std::string warning = "1 face has no texture coordinates";
+  const std::size_t first = text.find(warning);
+  REQUIRE(first != std::string::npos);
+  CHECK(text.find(warning, first + 1) == std::string::npos);
+  CHECK_THAT(text, Catch::Contains("atlas chart 1 (face 1) has zero texture area"));
+}
+
 TEST_CASE("stats says when the UVs were laid out for another texture shape", "[cli]") {
   // A unit square laid out 4 times narrower than high: a 4:1 texture's atlas, whose stretch
   // measured in a square texture reads as a chart flattened fourfold.
