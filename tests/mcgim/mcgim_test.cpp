@@ -573,6 +573,27 @@ TEST_CASE("a chart with a slit hole and a thin neck keeps its slit open", "[mcgi
   }
 }
 
+TEST_CASE("a pyramid level too small for the charts fails before the finer levels are built", "[mcgim]") {
+  // --levels 1024,4 sampled and fitted the 1024² level (33 s) before finding 4x4 too small.
+  const isochart::Mesh m = mcgim_test::cube_atlas(5);
+  PyramidOptions po;
+  po.sizes = {{256, 256}, {4, 4}};
+  int sampled = 0;
+  const isochart::Progress count = [&](isochart::Stage stage, double fraction) {
+    if (stage == isochart::Stage::Sampling && fraction == 0.0) ++sampled;
+    return true;
+  };
+  CHECK_THROWS_AS(build_pyramid(m, po, count), isochart::InputError);
+  CHECK(sampled == 0);
+  // Built in any order, the levels come back finest first, as before.
+  po.sizes = {{16, 16}, {48, 48}, {32, 32}};
+  const std::vector<Level> levels = build_pyramid(m, po);
+  REQUIRE(levels.size() == 3);
+  CHECK(levels[0].stats.width == 48);
+  CHECK(levels[2].stats.width == 16);
+  CHECK(levels[0].coarser.size() == levels[0].image.positions.size());
+}
+
 TEST_CASE("re-packed levels keep charts apart and stay watertight", "[mcgim]") {
   // Re-packing (the default) lays the charts out anew for each size with isochart::pack_charts:
   // mirrored charts (here: every other cube face flipped in u) are unmirrored first.
