@@ -208,8 +208,16 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   if (!a.levels.empty()) {
     for (int r : a.levels) sizes.push_back({r, r});
   } else if (a.samples > 0) {
-    const mcgim::ResolutionChoice rc =
-        for_atlas([&] { return mcgim::choose_resolution(atlas, a.samples, lo, ctx.progress(), kMaxSide); });
+    const mcgim::ResolutionChoice rc = for_atlas([&] {
+      try {
+        return mcgim::choose_resolution(atlas, a.samples, lo, ctx.progress(), kMaxSide);
+      } catch (const isochart::InputError& e) {
+        // "do not fit a 9x9 texture" named a size the user never gave.
+        if (!e.file().empty()) throw;
+        throw isochart::InputError("", "--samples " + std::to_string(a.samples) +
+                                           " is too few for this atlas's charts: " + e.what());
+      }
+    });
     if (rc.capped)
       ctx.warn(a.input, "--samples " + std::to_string(a.samples) + " needs an image larger than " +
                             std::to_string(kMaxSide) + "x" + std::to_string(kMaxSide) +
@@ -326,6 +334,14 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
                         std::to_string(s.input_euler_characteristic) + "; boundary loops " +
                         std::to_string(s.topology.boundary_loops) + ", input " +
                         std::to_string(s.input_boundary_loops) + "): too few samples for its charts");
+    else if (!s.topology.manifold())
+      // Same counts, but a vertex where two boundary loops or sheets touch: most mesh tools
+      // refuse such a file or split the vertex (which changes the counts).
+      ctx.warn(out, std::to_string(s.width) + "x" + std::to_string(s.height) + " level has " +
+                        std::to_string(s.topology.nonmanifold_vertices) +
+                        (s.topology.nonmanifold_vertices == 1 ? " non-manifold vertex"
+                                                              : " non-manifold vertices") +
+                        " (pinched where the surface is thinner than its samples)");
   }
   nlohmann::json j;
   j["input"] = a.input;

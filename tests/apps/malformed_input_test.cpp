@@ -434,6 +434,10 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --psnr-samples does nothing with --no-psnr\n"));
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --signal-use full", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --signal-use goes with --signal\n"));
+  CHECK(run_cli("remesh builtin:torus -o '" + (tmp.path / "r.ply").string() + "' --samples 16 --no-psnr",
+                err) == 2);
+  CHECK_THAT(line(),
+             Catch::Contains("builtin:torus: --samples 16 is too few for this atlas's charts: pack: "));
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --atlas-aspect 2", err) ==
         2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --atlas-aspect goes with --atlas\n"));
