@@ -226,6 +226,10 @@ std::string expected_kind(const CLI::Option* o) {
 
 std::string parse_error_message(const CLI::App& app, const CLI::ParseError& e) {
   const std::string msg = e.what();
+  // "--atlas-size: At Most 1 required but received 2" (an option given twice).
+  const auto most = msg.find(": At Most 1 required but received ");
+  if (most != std::string::npos)
+    return msg.substr(0, most) + ": given " + msg.substr(most + 34) + " times; give it once";
   // "Could not convert: --width = abc" (a value of the wrong type, or an integer too large).
   const std::string convert = "Could not convert: ";
   if (msg.rfind(convert, 0) == 0) {

@@ -91,6 +91,11 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   // An option that would be silently ignored is more likely a mistake than a wish.
   if (a.given.has("--signal-use") && a.signal.empty()) bad_option("--signal-use goes with --signal");
   if (a.given.has("--fit-passes") && a.no_optimize) bad_option("--fit-passes does nothing with --no-optimize");
+  // Diagonals are chosen by the closest-point fit; without it they are the shorter ones anyway.
+  if (a.shorter_diagonals && (a.no_optimize || a.fit_passes == 0))
+    bad_option(std::string("--shorter-diagonals does nothing with ") +
+               (a.no_optimize ? "--no-optimize" : "--fit-passes 0") +
+               " (the diagonals are the shorter ones)");
   if (a.given.has("--psnr-samples") && a.no_psnr) bad_option("--psnr-samples does nothing with --no-psnr");
   if (a.atlas_aspect > 0 && a.atlas.empty()) bad_option("--atlas-aspect goes with --atlas");
   if (a.keep_chart_sizes && a.atlas.empty())

@@ -245,7 +245,8 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
                             {"output", seconds_output}};
   j["seconds"] = seconds_since(t0);
   std::ostringstream t;
-  t << a.input << " with " << a.exemplar << ": " << built.num_charts() << " charts, levels";
+  t << a.input << " with " << a.exemplar << ": " << built.num_charts()
+    << (built.num_charts() == 1 ? " chart" : " charts") << ", levels";
   for (int lv : a.levels) t << " " << lv;
   t << "\n  seam error ";
   if (std::isnan(r.seam_error))

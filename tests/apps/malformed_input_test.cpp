@@ -434,6 +434,14 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --psnr-samples does nothing with --no-psnr\n"));
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --signal-use full", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --signal-use goes with --signal\n"));
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --res 32 --res 64", err) ==
+        2);
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --res: given 2 times; give it once\n"));
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() +
+                    "' --no-optimize --shorter-diagonals",
+                err) == 2);
+  CHECK_THAT(line(),
+             Catch::StartsWith("isocharts: error: --shorter-diagonals does nothing with --no-optimize"));
   CHECK(run_cli("remesh builtin:torus -o '" + (tmp.path / "r.ply").string() + "' --samples 16 --no-psnr",
                 err) == 2);
   CHECK_THAT(line(),
