@@ -189,6 +189,18 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
                           "²); the coarser levels hold fewer than --start-samples " +
                           std::to_string(so.min_level_samples) + " samples");
 
+  // The default scale ties the exemplar to the model's size, not its own: a 4096² photograph
+  // was synthesized from a 20² thumbnail without a word.
+  if (a.scale <= 0 && a.pixels_per_texel <= 0 && !r.levels.empty() && r.levels.front().exemplar_factor > 8) {
+    const auto& finest = r.levels.front();
+    std::ostringstream w;
+    w << "at the default scale (the exemplar spans about a tenth of the bounding-box diagonal) the "
+      << exemplar.width << "x" << exemplar.height << " exemplar is synthesized from " << finest.exemplar_width
+      << "x" << finest.exemplar_height
+      << " pixels at the finest level; --pixels-per-texel or --scale keeps more of it";
+    ctx.warn(a.exemplar, w.str());
+  }
+
   const auto tt = std::chrono::steady_clock::now();
   const isochart::Image atlas_tex = synth::transfer_to_atlas(atlas, pyramid[0], r.texture, a.atlas_size,
                                                                a.colour_transfer ? nullptr : &r, &exemplar);

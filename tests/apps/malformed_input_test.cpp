@@ -928,6 +928,19 @@ TEST_CASE("stats says when its packing ratio is not of the texture", "[cli]") {
              Catch::Contains("overlapping triangle pairs: the packing ratio counts their UV area twice"));
 }
 
+TEST_CASE("synth says when the default scale shrinks the exemplar to a thumbnail", "[cli]") {
+  // A large photograph at the default scale was synthesized from a few pixels without a word.
+  TempDir tmp("synth_thumb");
+  const fs::path err = tmp.path / "err.txt";
+  const std::string common =
+      "synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 32,16 --atlas-size 64";
+  CHECK(run_cli(common, err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains("builtin:bricks: at the default scale") &&
+                                  Catch::Contains("the 128x128 exemplar is synthesized from 4x4 pixels"));
+  CHECK(run_cli(common + " --pixels-per-texel 4", err) == 0);
+  CHECK(read_bytes(err).find("at the default scale") == std::string::npos);
+}
+
 TEST_CASE("a file given twice in one run is warned about once", "[cli]") {
   // The input and its --atlas are the same file: it is loaded twice, and its warning was
   // printed twice.
