@@ -87,7 +87,8 @@ void add_psnr(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(1LL, 20'000'000LL));
   sub->footer(
       "PSNR = 20 log10(diagonal / d), d the larger of the two one-sided RMS distances (the mean "
-      "of the two gives the second figure); distances are exact point-to-triangle.\n"
+      "of the two gives the second figure); distances are exact point-to-triangle. Identical surfaces "
+      "(d = 0) give inf, null in JSON.\n"
       "Example: isocharts psnr ../shared/data/meshes/horse.ply horse_remesh.ply --json");
   sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_psnr(ctx, *args); }; });
 }

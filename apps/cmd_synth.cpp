@@ -242,15 +242,20 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   j["smoothness"] = r.smoothness;
   j["copy_scale_off"] = r.copy_scale_off;
   nlohmann::json jl = nlohmann::json::array();
-  for (const auto& l : r.levels)
-    jl.push_back({{"resolution", {l.width, l.height}},
-                  {"exemplar", {l.exemplar_width, l.exemplar_height}},
-                  {"texel_size", l.texel_size},
-                  {"exemplar_pixels_per_texel", l.exemplar_factor},
-                  {"samples", l.groups},
-                  {"seam_taps", l.seam_taps},
-                  {"missing_taps", l.missing_taps},
-                  {"seconds", l.seconds}});
+  for (const auto& l : r.levels) {
+    // Levels below the start level are not synthesized: no exemplar level, not a zero one.
+    const bool synthesized = l.exemplar_width > 0;
+    jl.push_back(
+        {{"resolution", {l.width, l.height}},
+         {"synthesized", synthesized},
+         {"exemplar", synthesized ? nlohmann::json{l.exemplar_width, l.exemplar_height} : nlohmann::json()},
+         {"texel_size", l.texel_size},
+         {"exemplar_pixels_per_texel", synthesized ? nlohmann::json(l.exemplar_factor) : nlohmann::json()},
+         {"samples", l.groups},
+         {"seam_taps", l.seam_taps},
+         {"missing_taps", l.missing_taps},
+         {"seconds", l.seconds}});
+  }
   j["levels"] = jl;
   j["seconds_breakdown"] = {{"atlas", seconds_atlas},   {"pyramid", seconds_pyramid},
                             {"synthesis", r.seconds},   {"transfer", seconds_transfer},

@@ -937,8 +937,16 @@ TEST_CASE("synth says when the default scale shrinks the exemplar to a thumbnail
   CHECK(run_cli(common, err) == 0);
   CHECK_THAT(read_bytes(err), Catch::Contains("builtin:bricks: at the default scale") &&
                                   Catch::Contains("the 128x128 exemplar is synthesized from 4x4 pixels"));
-  CHECK(run_cli(common + " --pixels-per-texel 4", err) == 0);
+  const fs::path report = tmp.path / "r.json";
+  CHECK(run_cli("--report '" + report.string() + "' " + common + " --pixels-per-texel 4", err) == 0);
   CHECK(read_bytes(err).find("at the default scale") == std::string::npos);
+  // The 16² level is below the start level: not synthesized, so no exemplar level (it read 0x0).
+  const nlohmann::json j = nlohmann::json::parse(read_bytes(report));
+  REQUIRE(j.at("levels").size() == 2);
+  CHECK(j["levels"][0]["synthesized"].get<bool>());
+  CHECK_FALSE(j["levels"][1]["synthesized"].get<bool>());
+  CHECK(j["levels"][1]["exemplar"].is_null());
+  CHECK(j["levels"][1]["exemplar_pixels_per_texel"].is_null());
 }
 
 TEST_CASE("a file given twice in one run is warned about once", "[cli]") {
