@@ -307,6 +307,9 @@ void warn_uvs_outside(const Context& ctx, const std::string& file, const isochar
   ctx.warn(file, w.str());
 }
 
+namespace {
+
+// "a square texture", "a texture 3.89 times as wide as high".
 std::string describe_texture_aspect(double aspect) {
   if (aspect == 1.0) return "a square texture";
   const double r = aspect > 1 ? aspect : 1 / aspect;
@@ -320,12 +323,15 @@ std::string describe_texture_aspect(double aspect) {
   return w.str();
 }
 
-void warn_texture_aspect(const Context& ctx, const std::string& file, const isochart::Mesh& atlas,
-                         const std::string& what) {
+}  // namespace
+
+double read_texture_aspect(const Context& ctx, const std::string& file, const isochart::Mesh& atlas,
+                           double assumed, const std::string& consequence) {
   const double aspect = isochart::detect_texture_aspect(atlas);
-  if (aspect != 1.0)
-    ctx.warn(file,
-             "the texture coordinates look laid out for " + describe_texture_aspect(aspect) + "; " + what);
+  if (std::abs(std::log(aspect / assumed)) > std::log(1.1))
+    ctx.warn(file, "the texture coordinates look laid out for " + describe_texture_aspect(aspect) + "; " +
+                       consequence);
+  return aspect;
 }
 
 void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atlas, const std::string& file) {

@@ -181,13 +181,12 @@ void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atla
 void warn_uvs_outside(const Context& ctx, const std::string& file, const isochart::AtlasQuality& q,
                       const std::string& consequence);
 
-/// "a square texture", "a texture 3.89 times as wide as high" (width / height `aspect`).
-std::string describe_texture_aspect(double aspect);
-
-/// Warns when an external atlas's UVs look laid out for a non-square texture
-/// (isochart::detect_texture_aspect): `what` says what is done about it.
-void warn_texture_aspect(const Context& ctx, const std::string& file, const isochart::Mesh& atlas,
-                         const std::string& what);
+/// The width / height of the texture an atlas's UVs look laid out for
+/// (isochart::detect_texture_aspect). Warns "the texture coordinates look laid out for a texture
+/// 3.89 times as wide as high; " + `consequence` when that is more than 10 % from `assumed`, the
+/// shape the command would otherwise use.
+double read_texture_aspect(const Context& ctx, const std::string& file, const isochart::Mesh& atlas,
+                           double assumed, const std::string& consequence);
 
 /// The items of a comma-separated option value. An empty item ("64,,32", a trailing comma) is
 /// refused: CLI11's own splitting dropped them silently.

@@ -230,16 +230,21 @@ class Bench {
     BuiltAtlas b;
     const auto t0 = Clock::now();
     // Loaded once: an explicit external:FILE is tried against every mesh.
+    // Its texture's shape is read (and said) once too.
     auto it = loaded_.find(file);
     if (it == loaded_.end()) {
-      it = loaded_.emplace(file, load_any(ctx_, file, true)).first;
-      if (a_.atlas_aspect == 0)
-        warn_texture_aspect(ctx_, file, it->second,
-                            "its charts are measured and packed at that shape (--atlas-aspect sets it)");
+      isochart::Mesh m = load_any(ctx_, file, true);
+      const double aspect =
+          a_.atlas_aspect > 0
+              ? a_.atlas_aspect
+              : read_texture_aspect(
+                    ctx_, file, m, 1.0,
+                    "its charts are measured and packed at that shape (--atlas-aspect sets it)");
+      it = loaded_.emplace(file, std::make_pair(std::move(m), aspect)).first;
     }
-    b.geometry = it->second;
+    b.geometry = it->second.first;
     try {
-      b.atlas = isochart::atlas_from_uvs(b.geometry, a_.atlas_aspect);
+      b.atlas = isochart::atlas_from_uvs(b.geometry, it->second.second);
     } catch (const isochart::InputError& e) {
       throw isochart::InputError(file, e.what());
     }
@@ -434,7 +439,7 @@ class Bench {
   isochart::PackOptions pack_;
   std::vector<Row> rows_;
   std::vector<SweepPoint> sweep_;
-  std::map<std::string, isochart::Mesh> loaded_;
+  std::map<std::string, std::pair<isochart::Mesh, double>> loaded_;  // external atlas, its texture aspect
 };
 
 // ---- Output ---------------------------------------------------------------------------------

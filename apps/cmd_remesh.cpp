@@ -133,15 +133,18 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   // The atlas: an external one, or the iso-chart atlas of the input.
   nlohmann::json atlas_json;
   isochart::Mesh atlas;
+  // An atlas built here is packed square; only a given one has a shape to read.
+  double atlas_aspect = a.atlas_aspect > 0 ? a.atlas_aspect : 1.0;
   const auto ta = std::chrono::steady_clock::now();
   if (!a.atlas.empty()) {
     atlas = load_any(ctx, a.atlas, true).mesh;
     if (!atlas.has_uvs())
       throw isochart::InputError(a.atlas, "the atlas has no texture coordinates (vt)");
     check_atlas_matches(input, atlas, a.atlas);
+    // Read here once, said, and handed to the remesh (which would otherwise read it again).
     if (a.atlas_aspect == 0)
-      warn_texture_aspect(ctx, a.atlas, atlas,
-                          "its charts are packed at that shape (--atlas-aspect sets it)");
+      atlas_aspect = read_texture_aspect(ctx, a.atlas, atlas, 1.0,
+                                         "its charts are packed at that shape (--atlas-aspect sets it)");
     {
       // The remesh is of the atlas's surface; one with a face missing or a seam left open
       // (a hole in a closed input) passes the size check above, so say so.
@@ -206,8 +209,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   lo.geometric_iterations = a.fit_passes;
   lo.fit_diagonals = !a.shorter_diagonals;
   lo.keep_chart_sizes = a.keep_chart_sizes || !a.signal.empty();
-  // An atlas built here is packed square; only a given one has a shape to read.
-  lo.atlas_aspect = a.atlas.empty() ? 1.0 : a.atlas_aspect;
+  lo.atlas_aspect = atlas_aspect;
   std::vector<std::array<int, 2>> sizes;
   nlohmann::json search;
   if (!a.levels.empty()) {

@@ -109,9 +109,9 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   if (a.uv_layout) {
     // Without --aspect, a layout made for a non-square texture is drawn in that shape.
     if (a.aspect <= 0 && mesh.has_uvs()) {
-      const double detected = isochart::detect_texture_aspect(mesh);
+      const double detected =
+          read_texture_aspect(ctx, a.input, mesh, 1.0, "drawn in that shape (--aspect sets it)");
       if (detected != 1.0) {
-        warn_texture_aspect(ctx, a.input, mesh, "drawn in that shape (--aspect sets it)");
         aspect = detected;
         const std::array<int, 2> size = picture_size(aspect);
         width = size[0];

@@ -54,12 +54,8 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
     const isochart::AtlasQuality q = isochart::measure_atlas(mesh);
     warn_uvs_outside(ctx, a.input, q, "they are clamped to the texture's edge");
     // An 8:1 atlas baked into a square texture reads as twice the signal stretch it has.
-    const double detected = isochart::detect_texture_aspect(mesh),
-                 given = static_cast<double>(width) / height;
-    if (std::abs(std::log(detected / given)) > std::log(1.1))
-      ctx.warn(a.input, "the texture coordinates look laid out for " + describe_texture_aspect(detected) +
-                            "; the texture measured is " + std::to_string(width) + "x" +
-                            std::to_string(height));
+    read_texture_aspect(ctx, a.input, mesh, static_cast<double>(width) / height,
+                        "the texture measured is " + std::to_string(width) + "x" + std::to_string(height));
     if (q.overlapping_pairs > 0)
       ctx.warn(a.input, std::to_string(q.overlapping_pairs) +
                             " pairs of triangles overlap in UV; they share texels, which raises the SAE");

@@ -316,7 +316,7 @@ int closest_index(const std::vector<double>& arclen, int lo, int hi, double targ
 
 }  // namespace
 
-AtlasCharts prepare_atlas(const Mesh& m) {
+AtlasCharts prepare_atlas(const Mesh& m, double texture_aspect) {
   check_input(m);
   AtlasCharts a;
   a.mesh = &m;
@@ -335,7 +335,7 @@ AtlasCharts prepare_atlas(const Mesh& m) {
   a.input_euler = topo.euler_characteristic();
   a.input_boundary_loops = static_cast<int>(topo.boundary_loops().size());
   a.surface_area = isochart::surface_area(m);
-  a.uv_aspect = isochart::detect_texture_aspect(m);
+  a.uv_aspect = texture_aspect > 0 ? texture_aspect : isochart::detect_texture_aspect(m);
 
   a.charts = split_charts(m, topo);
   for (std::size_t c = 0; c < a.charts.size(); ++c) build_chart(m, static_cast<int>(c), a.charts[c]);
@@ -521,8 +521,7 @@ Placement place_charts(const AtlasCharts& a, const LevelOptions& o, const std::v
     for (int c = 0; c < nc; ++c) {
       const Chart& ch = a.charts[c];
       pack[c].uv = ch.uv;
-      const double aspect = o.atlas_aspect > 0 ? o.atlas_aspect : a.uv_aspect;
-      const double sx = ch.area_uv < 0 ? -aspect : aspect;
+      const double sx = ch.area_uv < 0 ? -a.uv_aspect : a.uv_aspect;
       if (sx != 1.0)
         for (Vec2d& uv : pack[c].uv) uv.x *= sx;
       pack[c].faces = ch.local_faces;

@@ -70,14 +70,16 @@ struct AtlasCharts {
   int input_euler = 0;
   int input_boundary_loops = 0;
   double surface_area = 0;
-  // Width / height of the texture the atlas's UVs were laid out for (detect_texture_aspect):
-  // re-packing scales u by it, so charts from a 4:1 texture are not packed 4 times flattened.
+  // Width / height of the texture the atlas's UVs were laid out for (given, or read by
+  // detect_texture_aspect): re-packing scales u by it, so charts from a 4:1 texture are not
+  // packed 4 times flattened.
   double uv_aspect = 1;
 };
 
 // Splits the atlas into charts, checks that each is a disk, and builds the cut graph.
+// `texture_aspect`: the width / height the UVs were laid out for; 0 reads it from them.
 // \throw InputError for an invalid atlas (see build_level).
-AtlasCharts prepare_atlas(const Mesh& atlas);
+AtlasCharts prepare_atlas(const Mesh& atlas, double texture_aspect);
 
 // The charts' layout in one image, in texel units (sample (x, y) has its centre at (x+.5, y+.5)).
 struct Placement {

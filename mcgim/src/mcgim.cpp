@@ -170,7 +170,7 @@ void check_not_empty(const Level& lv) {
 Level build_level(const isochart::Mesh& atlas, const LevelOptions& options, const isochart::Progress& progress) {
   check_options(options);
   const auto t0 = Clock::now();
-  const detail::AtlasCharts a = detail::prepare_atlas(atlas);
+  const detail::AtlasCharts a = detail::prepare_atlas(atlas, options.atlas_aspect);
   const double seconds = since(t0);
   Level lv = build_prepared(a, options, progress);
   lv.stats.seconds_charts = seconds;
@@ -192,7 +192,7 @@ std::vector<Level> build_pyramid(const isochart::Mesh& atlas, const PyramidOptio
     check_options(o);
   }
   const auto t0 = Clock::now();
-  const detail::AtlasCharts a = detail::prepare_atlas(atlas);
+  const detail::AtlasCharts a = detail::prepare_atlas(atlas, o.atlas_aspect);
   const double seconds = since(t0);
   // Built coarsest first: a level too small for the charts fails in a second, not after the
   // finer levels' minutes of work (--levels 1024,4 took 33 s to say 4x4 was too small). The
@@ -220,7 +220,7 @@ ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target
   if (target < 16) throw isochart::InputError("", "the sample budget must be at least 16");
   if (max_side < 4 || max_side > 16384)
     throw isochart::InputError("", "the largest side must be in 4..16384");
-  const detail::AtlasCharts a = detail::prepare_atlas(atlas);
+  const detail::AtlasCharts a = detail::prepare_atlas(atlas, options.atlas_aspect);
   LevelOptions o = options;
   ResolutionChoice best;
   auto trial = [&](int res) {
