@@ -433,6 +433,17 @@ TEST_CASE("signal atlases are identical for one and two threads", "[signal]") {
   CHECK(same);
 }
 
+namespace {
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
 TEST_CASE("isocharts sae reports the field sae", "[signal]") {
   const std::filesystem::path tmp =
       std::filesystem::temp_directory_path() / ("isocharts_signal_test_" + std::to_string(::getpid()));
@@ -442,10 +453,7 @@ TEST_CASE("isocharts sae reports the field sae", "[signal]") {
                     "/face.obj --width 128 --height 128 > /dev/null && \"" + ISOCHARTS_CLI +
                     "\" -q --json sae " + dir + "/face.obj --signal normals --res 64 > " + dir + "/sae.json";
   REQUIRE(std::system(cmd.c_str()) == 0);
-  std::ifstream in(dir + "/sae.json");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string json = ss.str();
+  const std::string json = read_text(dir + "/sae.json");
   CHECK(json.find("\"sae\":") != std::string::npos);
   // The signal stretch is measured in texels of the texture named: the same atlas, packed for
   // 512×64, read as square gave 2.1 where it is 1.0.
@@ -453,10 +461,7 @@ TEST_CASE("isocharts sae reports the field sae", "[signal]") {
     const std::string c = "\"" + std::string(ISOCHARTS_CLI) + "\" -q --json sae " + dir +
                           "/wide.obj --signal normals " + size + " > " + dir + "/wide.json";
     REQUIRE(std::system(c.c_str()) == 0);
-    std::ifstream f(dir + "/wide.json");
-    std::stringstream t;
-    t << f.rdbuf();
-    const std::string text = t.str();
+    const std::string text = read_text(dir + "/wide.json");
     const auto at = text.find("\"signal_stretch\":");
     REQUIRE(at != std::string::npos);
     return std::stod(text.substr(at + 17));
@@ -472,10 +477,7 @@ TEST_CASE("isocharts sae reports the field sae", "[signal]") {
     const std::string c = "\"" + std::string(ISOCHARTS_CLI) + "\" sae " + dir +
                           "/wide.obj --signal normals " + args + " > /dev/null 2> " + dir + "/err.txt";
     const int code = std::system(c.c_str());
-    std::ifstream f(dir + "/err.txt");
-    std::stringstream t;
-    t << f.rdbuf();
-    return std::make_pair(WEXITSTATUS(code), t.str());
+    return std::make_pair(WEXITSTATUS(code), read_text(dir + "/err.txt"));
   };
   auto [square_rc, square_err] = stderr_of("--res 64");
   CHECK(square_rc == 0);
@@ -489,11 +491,9 @@ TEST_CASE("isocharts sae reports the field sae", "[signal]") {
                           "\" -q --json atlas builtin:face --signal normals -o " + dir +
                           "/ws.obj --width 512 --height 64 --sae-res 64 > " + dir + "/ws.json";
     REQUIRE(std::system(c.c_str()) == 0);
-    std::ifstream f(dir + "/ws.json");
-    std::stringstream t;
-    t << f.rdbuf();
-    CHECK(t.str().find("\"sae_width\": 181") != std::string::npos);
-    CHECK(t.str().find("\"sae_height\": 23") != std::string::npos);
+    const std::string report = read_text(dir + "/ws.json");
+    CHECK(report.find("\"sae_width\": 181") != std::string::npos);
+    CHECK(report.find("\"sae_height\": 23") != std::string::npos);
   }
   auto [lone_rc, lone_err] = stderr_of("--width 512");
   CHECK(lone_rc == 2);
