@@ -217,7 +217,9 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   } else if (a.samples > 0) {
     const mcgim::ResolutionChoice rc = for_atlas([&] {
       try {
-        return mcgim::choose_resolution(atlas, a.samples, lo, ctx.progress(), kMaxSide);
+        // Square sizes by the samples left after cleanup: the covered count alone gave 64
+        // of --samples 100 where 21x21 gives 97.
+        return mcgim::match_resolution(atlas, a.samples, lo, ctx.progress(), kMaxSide, true);
       } catch (const isochart::InputError& e) {
         // "do not fit a 9x9 texture" named a size the user never gave.
         if (!e.file().empty()) throw;
@@ -233,7 +235,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     sizes.push_back({rc.width, rc.height});
     search["target_samples"] = a.samples;
     search["resolution"] = {rc.width, rc.height};
-    search["covered_samples"] = rc.defined_samples;
+    search["defined_samples"] = rc.defined_samples;
     search["trials"] = rc.trials;
   } else if (a.width > 0) {
     sizes.push_back({a.width, a.height});

@@ -258,7 +258,7 @@ ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target
 }
 
 ResolutionChoice match_resolution(const isochart::Mesh& atlas, long long target, const LevelOptions& options,
-                                  const isochart::Progress& progress, int max_side) {
+                                  const isochart::Progress& progress, int max_side, bool square) {
   LevelOptions o = options;
   o.optimize = false;  // the sample count does not depend on it
   ResolutionChoice rc = choose_resolution(atlas, target, o, progress, max_side);
@@ -286,10 +286,16 @@ ResolutionChoice match_resolution(const isochart::Mesh& atlas, long long target,
     trial(w, h);
   }
   // Cleanup makes the count jump by whole rows of a chart: the sizes around the best, by ring.
+  // Square sizes step one side at a time around a fixed centre: following the best as it
+  // moved skipped 21x21 (97 of 100 samples) on the way from 20x20 to 22x22.
+  const std::array<int, 2> centre = best;
   for (int ring = 1; ring <= 3 && !good(); ++ring)
     for (int dw = -ring; dw <= ring && !good(); ++dw)
       for (int dh = -ring; dh <= ring && !good(); ++dh)
-        if (std::max(std::abs(dw), std::abs(dh)) == ring) trial(best[0] + dw, best[1] + dh);
+        if (!square && std::max(std::abs(dw), std::abs(dh)) == ring)
+          trial(best[0] + dw, best[1] + dh);
+        else if (square && dw == dh && std::abs(dw) == ring)
+          trial(centre[0] + dw, centre[1] + dh);
   rc.width = best[0];
   rc.height = best[1];
   rc.defined_samples = tried[best];

@@ -380,6 +380,36 @@ TEST_CASE("the resolution search reaches the sample budget", "[mcgim]") {
   CHECK(capped.defined_samples < 8000);
 }
 
+TEST_CASE("a square budget search finds the square size nearest the budget after cleanup", "[mcgim]") {
+  // remesh --samples 100 gave 64 samples where 21x21 gives 97: the search counted samples
+  // before cleanup, and its neighbourhood followed the best size past the right one.
+  const isochart::Mesh m = mcgim_test::sphere_atlas(16, 32);
+  LevelOptions o;
+  o.optimize = false;
+  std::map<int, long long> defined;
+  for (int r = 4; r <= 48; ++r) {
+    o.width = o.height = r;
+    try {
+      defined[r] = build_level(m, o).stats.defined_samples;
+    } catch (const isochart::InputError&) {
+      // the charts do not fit sizes this small
+    }
+  }
+  REQUIRE(defined.size() > 30);
+  for (long long target : {100LL, 150LL, 400LL, 1000LL}) {
+    const ResolutionChoice c = match_resolution(m, target, o, {}, 16384, true);
+    long long nearest = target;
+    for (const auto& [r, d] : defined) nearest = std::min(nearest, std::llabs(d - target));
+    INFO(target << " -> " << c.width << "x" << c.height << " (" << c.defined_samples << "), nearest off by "
+                << nearest);
+    CHECK(c.width == c.height);
+    REQUIRE(defined.count(c.width));
+    CHECK(c.defined_samples == defined[c.width]);
+    // The search stops once within 2 %, so it may stop short of the very nearest.
+    CHECK(std::llabs(c.defined_samples - target) <= std::max(nearest, target / 50));
+  }
+}
+
 TEST_CASE("the matched resolution holds the budget after cleanup, within the largest side", "[mcgim]") {
   const isochart::Mesh m = mcgim_test::sphere_atlas(16, 32);
   LevelOptions o;

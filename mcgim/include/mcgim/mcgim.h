@@ -158,11 +158,12 @@ ResolutionChoice choose_resolution(const isochart::Mesh& atlas, long long target
                                    int max_side = 16384);
 
 /// choose_resolution, then refined by building levels (without optimization) at nearby sizes,
-/// width and height apart, until the defined samples after cleanup are within 2 % of
-/// `target_samples` or a few dozen sizes are tried; the closest wins. `defined_samples` is then
-/// the built level's. A capped choice is returned as is: every other size holds fewer.
+/// width and height apart (or square sizes only, with `square`), until the defined samples
+/// after cleanup are within 2 % of `target_samples` or a few dozen sizes are tried; the closest
+/// wins. `defined_samples` is then the built level's. A capped choice is returned as is: every
+/// other size holds fewer.
 ResolutionChoice match_resolution(const isochart::Mesh& atlas, long long target_samples,
                                   const LevelOptions& options = {}, const isochart::Progress& progress = {},
-                                  int max_side = 16384);
+                                  int max_side = 16384, bool square = false);
 
 }  // namespace mcgim
