@@ -307,6 +307,18 @@ void warn_uvs_outside(const Context& ctx, const std::string& file, const isochar
   ctx.warn(file, w.str());
 }
 
+void warn_sparse_chart(const Context& ctx, const std::string& file, const isochart::ChartDensity& d,
+                       const std::string& consequence) {
+  // Real atlases keep every chart above half its share (signal-specialized ones included); a
+  // hundredth is a chart shrunk by mistake, which passed every other check.
+  if (d.first_face < 0 || d.density >= 0.01) return;
+  std::ostringstream w;
+  w << "the chart of face " << d.first_face << " (" << d.faces << (d.faces == 1 ? " face" : " faces")
+    << ") gets " << std::setprecision(2) << d.density << " of the texture its surface area would get; "
+    << consequence;
+  ctx.warn(file, w.str());
+}
+
 namespace {
 
 // "a square texture", "a texture 3.89 times as wide as high".

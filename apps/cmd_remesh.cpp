@@ -168,6 +168,11 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     if (q.overlapping_pairs > 0)
       ctx.warn(a.atlas, "the atlas has " + std::to_string(q.overlapping_pairs) +
                             " overlapping triangle pairs in UV; where a chart overlaps itself the remesh folds");
+    // Re-packed at its surface area a speck of a chart samples as well as any; kept at its size
+    // it collapses to a few samples (30 dB where the same atlas re-packed gave 77).
+    if (a.keep_chart_sizes)
+      warn_sparse_chart(ctx, a.atlas, q.sparsest,
+                        "--keep-chart-sizes keeps it that small, so its surface gets almost no samples");
   } else {
     isochart::AtlasOptions ao;
     ao.seed = ctx.opts.seed;

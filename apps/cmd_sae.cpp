@@ -63,6 +63,7 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
       ctx.warn(a.input, std::to_string(q.stretch.degenerate) +
                             (q.stretch.degenerate == 1 ? " triangle has" : " triangles have") +
                             " zero area in UV; they get no texels");
+    warn_sparse_chart(ctx, a.input, q.sparsest, "its signal is sampled by almost no texels");
   }
   // The signal lives on the source mesh (the atlas's mesh, perhaps numbered otherwise) when one is given:
   // e.g. its vertex colours, or a texture through its original texture coordinates.

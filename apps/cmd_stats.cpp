@@ -37,6 +37,7 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
   if (q.overlapping_pairs > 0)
     ctx.warn(a.input, std::to_string(q.overlapping_pairs) +
                           " overlapping triangle pairs: the packing ratio counts their UV area twice");
+  warn_sparse_chart(ctx, a.input, q.sparsest, "its surface gets almost no texels");
 
   nlohmann::json j;
   j["file"] = a.input;
@@ -56,6 +57,7 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
   j["surface_area"] = q.stretch.area_3d;
   j["uv_area"] = q.uv_area;
   j["uv_bbox"] = {q.uv_min.x, q.uv_min.y, q.uv_max.x, q.uv_max.y};
+  j["min_chart_density"] = q.sparsest.density;
   j["seconds"] = seconds_since(t0);
 
   std::ostringstream t;

@@ -500,6 +500,41 @@ std::vector<int> uv_charts(const Mesh& mesh, int& num_charts) {
   return uv_charts(mesh, Topology(mesh), num_charts);
 }
 
+namespace {
+
+ChartDensity sparsest_of(const Mesh& mesh, const std::vector<int>& chart, int num_charts) {
+  std::vector<double> chart_uv(num_charts, 0), chart_area(num_charts, 0);
+  std::vector<int> first(num_charts, -1), count(num_charts, 0);
+  const std::vector<double> areas = face_areas(mesh);
+  for (int f = 0; f < mesh.num_faces(); ++f) {
+    const Face& t = mesh.face_uvs[f];
+    const int c = chart[f];
+    chart_uv[c] += std::abs(signed_area(mesh.uvs[t[0]], mesh.uvs[t[1]], mesh.uvs[t[2]]));
+    chart_area[c] += areas[f];
+    if (first[c] < 0) first[c] = f;
+    ++count[c];
+  }
+  const double total_uv = std::accumulate(chart_uv.begin(), chart_uv.end(), 0.0);
+  const double total_area = std::accumulate(chart_area.begin(), chart_area.end(), 0.0);
+  ChartDensity d;
+  if (!(total_uv > 0) || !(total_area > 0)) return d;
+  for (int c = 0; c < num_charts; ++c) {
+    if (!(chart_area[c] > 0)) continue;
+    const double density = (chart_uv[c] / total_uv) / (chart_area[c] / total_area);
+    if (d.first_face < 0 || density < d.density) d = {density, first[c], count[c]};
+  }
+  return d;
+}
+
+}  // namespace
+
+ChartDensity sparsest_chart(const Mesh& mesh) {
+  if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates (vt)");
+  int n = 0;
+  const std::vector<int> chart = uv_charts(mesh, n);
+  return sparsest_of(mesh, chart, n);
+}
+
 AtlasQuality measure_atlas(const Mesh& mesh, double texture_aspect) {
   if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates (vt)");
   AtlasQuality q;
@@ -540,6 +575,7 @@ AtlasQuality measure_atlas(const Mesh& mesh, double texture_aspect) {
   }
   const double box = (q.uv_max.x - q.uv_min.x) * (q.uv_max.y - q.uv_min.y);
   q.packing_ratio = box > 0 ? q.uv_area / box : 0;
+  q.sparsest = sparsest_of(mesh, chart, q.charts);
   for (int e = 0; e < topo.num_edges(); ++e) {
     // Mesh boundary edges are not seams; interior edges are when the UVs differ across them.
     if (topo.edge_faces(e).size() < 2 || uv_continuous(mesh, topo, e)) continue;

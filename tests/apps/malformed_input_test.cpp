@@ -928,6 +928,34 @@ TEST_CASE("stats says when its packing ratio is not of the texture", "[cli]") {
              Catch::Contains("overlapping triangle pairs: the packing ratio counts their UV area twice"));
 }
 
+TEST_CASE("stats, sae and remesh --keep-chart-sizes name a chart shrunk to a speck", "[cli]") {
+  // A chart at a millionth of its texture share passed every check; kept at that size by
+  // remesh --keep-chart-sizes it collapsed (30 dB) without a word.
+  TempDir tmp("speck");
+  const fs::path err = tmp.path / "err.txt", speck = tmp.path / "speck.obj", fine = tmp.path / "fine.obj";
+  const std::string mesh =
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nv 2 1 0\n"
+      "vt 0.1 0.1\nvt 0.45 0.1\nvt 0.45 0.9\nvt 0.1 0.9\nvt 0.6 0.1\n";
+  const std::string faces = "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\nf 2/5 5/6 6/7\nf 2/5 6/7 3/8\n";
+  std::ofstream(speck) << mesh << "vt 0.6001 0.1\nvt 0.6001 0.1001\nvt 0.6 0.1001\n" << faces;
+  std::ofstream(fine) << mesh << "vt 0.95 0.1\nvt 0.95 0.9\nvt 0.6 0.9\n" << faces;
+  const std::string warning =
+      "the chart of face 2 (2 faces) gets 7.1e-08 of the texture its surface area would get";
+  const std::string s = "'" + speck.string() + "'", f = "'" + fine.string() + "'";
+  CHECK(run_cli("stats " + s, err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains(warning + "; its surface gets almost no texels"));
+  CHECK(run_cli("sae " + s + " --res 32", err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains(warning + "; its signal is sampled by almost no texels"));
+  const std::string out = " --res 32 --no-psnr -o '" + (tmp.path / "r.ply").string() + "'";
+  CHECK(run_cli("remesh " + s + " --atlas " + s + " --keep-chart-sizes" + out, err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains(warning + "; --keep-chart-sizes keeps it that small"));
+  // Re-packed at their surface areas, the charts sample evenly: nothing to say.
+  CHECK(run_cli("remesh " + s + " --atlas " + s + out, err) == 0);
+  CHECK_THAT(read_bytes(err), !Catch::Contains("gets "));
+  CHECK(run_cli("stats " + f, err) == 0);
+  CHECK_THAT(read_bytes(err), !Catch::Contains("gets "));
+}
+
 TEST_CASE("synth says when the default scale shrinks the exemplar to a thumbnail", "[cli]") {
   // A large photograph at the default scale was synthesized from a few pixels without a word.
   TempDir tmp("synth_thumb");

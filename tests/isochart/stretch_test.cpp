@@ -88,6 +88,30 @@ TEST_CASE("an atlas's mirrored charts are measured unmirrored and counted apart"
   CHECK(std::isinf(z.stretch.l2));
 }
 
+TEST_CASE("the chart with the fewest texels for its surface is found", "[stretch]") {
+  // A chart shrunk to a speck by a broken atlas passed every check and collapsed in
+  // remesh --keep-chart-sizes.
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {2, 0, 0}, {2, 1, 0}};
+  m.faces = {{0, 1, 2}, {0, 2, 3}, {1, 4, 5}, {1, 5, 2}};
+  m.uvs = {{0.1, 0.1}, {0.45, 0.1}, {0.45, 0.9}, {0.1, 0.9},
+           {0.6, 0.1}, {0.95, 0.1}, {0.95, 0.9}, {0.6, 0.9}};
+  m.face_uvs = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+  ChartDensity even = sparsest_chart(m);
+  CHECK(even.density == Approx(1.0));
+  CHECK(even.faces == 2);
+  // The second square at a thousandth of its side: a millionth of its share, near enough.
+  for (int i : {5, 6, 7}) m.uvs[i] = m.uvs[4] + (m.uvs[i] - m.uvs[4]) * 1e-3;
+  const ChartDensity speck = sparsest_chart(m);
+  CHECK(speck.first_face == 2);
+  CHECK(speck.faces == 2);
+  CHECK(speck.density == Approx(2e-6).epsilon(1e-3));
+  CHECK(measure_atlas(m).sparsest.density == Approx(speck.density));
+  // Texels spread unevenly but not broken: half the density in one chart.
+  for (int i : {5, 6, 7}) m.uvs[i] = m.uvs[4] + (m.uvs[i] - m.uvs[4]) * 1e3 * std::sqrt(0.5);
+  CHECK(sparsest_chart(m).density == Approx(2 * 0.5 / 1.5));
+}
+
 TEST_CASE("exact UV overlap test", "[stretch][overlap]") {
   using T = std::array<Vec2d, 3>;
   const T a{Vec2d{0, 0}, Vec2d{1, 0}, Vec2d{0, 1}};

@@ -84,6 +84,16 @@ bool uv_layout_is_embedding(const std::vector<Face>& tris, const std::vector<Vec
 /// share texture coordinates. Returns the chart id per face; `num_charts` receives the count.
 std::vector<int> uv_charts(const Mesh& mesh, int& num_charts);
 
+/// The chart with the fewest texels for its surface: its share of the UV area over its share of
+/// the surface area, 1 for every chart when texels are spread evenly. A chart shrunk to a speck
+/// by a broken atlas reads 1e-9; real atlases, signal-specialized ones included, keep above 0.5.
+struct ChartDensity {
+  double density = 1;
+  int first_face = -1;  ///< -1 without a chart of positive surface and UV area
+  int faces = 0;
+};
+ChartDensity sparsest_chart(const Mesh& mesh);
+
 /// All the figures `isocharts stats` prints.
 struct AtlasQuality {
   int charts = 0;
@@ -98,6 +108,7 @@ struct AtlasQuality {
   double seam_length = 0;     ///< 3D length of interior mesh edges cut by the atlas
   double seam_length_relative = 0;  ///< seam_length / sqrt(surface area)
   Vec2d uv_min, uv_max;       ///< UV bounding box
+  ChartDensity sparsest;
 };
 /// `texture_aspect`: as for measure_texture_stretch.
 AtlasQuality measure_atlas(const Mesh& mesh, double texture_aspect = 1);
