@@ -1056,6 +1056,27 @@ TEST_CASE("a texture signal needs texture coordinates on every face", "[cli]") {
               err) == 0);
 }
 
+TEST_CASE("a signal atlas's stretch bounds are its charts', each at its own density", "[cli][slow]") {
+  // A signal atlas packs charts at the densities the signal asks for; measured as one texture
+  // they read as shrunk against each other, and every signal atlas "missed its bounds" with
+  // the reason "some triangles are too thin for the coordinates' precision".
+  TempDir tmp("signal_bounds");
+  const fs::path err = tmp.path / "err.txt", report = tmp.path / "r.json";
+  REQUIRE(run_cli("--threads 2 --report '" + report.string() +
+                      "' atlas builtin:creature --signal normals -o '" + (tmp.path / "a.obj").string() + "'",
+                  err) == 0);
+  CHECK_THAT(read_bytes(err), !Catch::Contains("misses its bounds"));
+  const nlohmann::json j = nlohmann::json::parse(read_bytes(report));
+  CHECK(j["bounds_met"] == true);
+  CHECK(j["chart_linf_max"].get<double>() <= 5.0);
+  CHECK(j["chart_l2_max"].get<double>() <= 2.0);
+  double worst = 0;
+  for (const auto& c : j["chart_list"]) worst = std::max(worst, c["linf"].get<double>());
+  CHECK(j["chart_linf_max"].get<double>() == worst);
+  // The whole atlas's figure is over the bound by design: what the per-chart bound is for.
+  CHECK(j["linf_stretch"].get<double>() > 5.0);
+}
+
 TEST_CASE("sae warns when the UVs leave the texture, overlap or collapse", "[cli]") {
   TempDir tmp("sae_warnings");
   const fs::path atlas = tmp.path / "a.obj", outside = tmp.path / "outside.obj", err = tmp.path / "err.txt";
