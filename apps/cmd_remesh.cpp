@@ -274,8 +274,15 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     const std::string out = level_path(a.output, s.width, s.height, l > 0);
     const auto tw = std::chrono::steady_clock::now();
     isochart::save_mesh(lv.remesh.mesh, out);
-    if (!a.exr.empty()) mcgim::write_exr(lv.image, image_path(a.exr, s.width, s.height, ".exr"));
-    if (!a.png.empty()) mcgim::write_normal_preview(lv.image, image_path(a.png, s.width, s.height, ".png"));
+    std::vector<std::string> images;
+    if (!a.exr.empty()) {
+      images.push_back(image_path(a.exr, s.width, s.height, ".exr"));
+      mcgim::write_exr(lv.image, images.back());
+    }
+    if (!a.png.empty()) {
+      images.push_back(image_path(a.png, s.width, s.height, ".png"));
+      mcgim::write_normal_preview(lv.image, images.back());
+    }
     const double seconds_output = seconds_since(tw);
     mcgim::DistanceResult d;
     if (!a.no_psnr) {
@@ -319,6 +326,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
       j["distance_samples"] = a.psnr_samples;
     }
     j["correspondence_samples"] = lv.coarser.empty() ? 0 : s.defined_samples;
+    j["images"] = images;
     j["seconds"] = {{"charts", s.seconds_charts},
                     {"packing", s.seconds_packing},
                     {"sampling", s.seconds_sampling},
@@ -336,7 +344,9 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
       << (s.topology.manifold() ? "manifold" : "NOT manifold") << ", euler " << s.topology.euler_characteristic
       << (s.topology.euler_characteristic == s.input_euler_characteristic ? "" : " (input " + std::to_string(s.input_euler_characteristic) + ")");
     if (!a.no_psnr) t << ", PSNR " << std::fixed << std::setprecision(2) << d.psnr << " dB" << std::defaultfloat;
-    t << " -> " << out << "\n";
+    t << " -> " << out;
+    for (const std::string& image : images) t << ", " << image;
+    t << "\n";
     // Too few samples for the charts' cut paths (a coarse level of a many-chart atlas): the
     // remesh is written, but a pipeline reading only the exit code should hear about it.
     const bool same_topology = s.topology.euler_characteristic == s.input_euler_characteristic &&

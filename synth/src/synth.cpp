@@ -619,9 +619,9 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
           min_scale,
           format("exemplar scale too small: it would magnify the %dx%d exemplar %.4g times, to %.4gx%.4g "
                  "pixels, more than both its own size and the finest level's %.0f samples; the smallest "
-                 "scale is %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel)",
-                 exemplar.width, exemplar.height, 1 / f, exemplar.width / f, exemplar.height / f, level_pixels,
-                 round_up_4(min_scale), round_up_4(min_factor)));
+                 "scale is %.4g exemplar pixels per unit length (%.4g per texel)",
+                 exemplar.width, exemplar.height, 1 / f, exemplar.width / f, exemplar.height / f,
+                 level_pixels, round_up_4(min_scale), round_up_4(min_factor)));
     }
   }
 
@@ -636,9 +636,9 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
       const double max_scale = max_factor / pyramid[0].stats.texel_size;
       move_or_refuse(
           max_scale,
-          format("exemplar scale too large: a texel of the finest level would cover %.4g exemplar pixels, "
+          format("exemplar scale too large: a texel of the finest level would cover %.6g exemplar pixels, "
                  "shrinking the %dx%d exemplar below 4 pixels across; the largest scale is %.4g exemplar "
-                 "pixels per unit length (%.4g exemplar pixels per texel)",
+                 "pixels per unit length (%.4g per texel)",
                  f, exemplar.width, exemplar.height, round_down_4(max_scale), round_down_4(max_factor)));
     }
   }
@@ -656,12 +656,12 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
       const double min_scale = min_factor / pyramid[0].stats.texel_size;
       move_or_refuse(
           min_scale,
-          format("exemplar too large at this scale: the %dx%d exemplar at %.4g exemplar pixels per texel "
+          format("exemplar too large at this scale: the %dx%d exemplar at %.4g exemplar pixel%s per texel "
                  "would be searched as %.4g pixels (about %.2g GB); at most %.0f (1024x1024) are: use a "
-                 "scale of at least %.4g exemplar pixels per unit length (%.4g exemplar pixels per texel) "
+                 "scale of at least %.4g exemplar pixels per unit length (%.4g per texel) "
                  "or a smaller exemplar",
-                 exemplar.width, exemplar.height, f, searched, searched * 1.2e3 / 1e9, kMaxSearchedPixels,
-                 round_up_4(min_scale), round_up_4(min_factor)));
+                 exemplar.width, exemplar.height, f, f == 1 ? "" : "s", searched, searched * 1.2e3 / 1e9,
+                 kMaxSearchedPixels, round_up_4(min_scale), round_up_4(min_factor)));
     }
   }
 

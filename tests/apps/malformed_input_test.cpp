@@ -478,8 +478,9 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
                     "' --levels 64,32 --pixels-per-texel 0.001",
                 err) == 2);
   const std::string scale_line = line();
-  CHECK_THAT(scale_line, Catch::StartsWith("isocharts: error: --pixels-per-texel 0.001: exemplar scale too small") &&
-                             Catch::Contains("the smallest scale is") && Catch::EndsWith("pixels per texel)\n"));
+  CHECK_THAT(scale_line,
+             Catch::StartsWith("isocharts: error: --pixels-per-texel 0.001: exemplar scale too small") &&
+                 Catch::Contains("the smallest scale is") && Catch::EndsWith("(1 per texel)\n"));
   CHECK(std::count(scale_line.begin(), scale_line.end(), '\n') == 1);
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt"});
   // A tiny scale printed the magnified size with all its 300 digits and lost the advice at the
@@ -488,7 +489,7 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
                     "' --levels 64,32 --scale 1e-300",
                 err) == 2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --scale 1e-300: exemplar scale too small") &&
-                         Catch::Contains("the smallest scale is") && Catch::EndsWith("pixels per texel)\n"));
+                         Catch::Contains("the smallest scale is") && Catch::EndsWith("(1 per texel)\n"));
   // The other end: a scale that would shrink the exemplar below 4 pixels across ran capped at
   // that and reported the scale asked for.
   CHECK(
@@ -1106,9 +1107,13 @@ TEST_CASE("directories, '-' and image prefixes with an extension are named for w
   CHECK_THAT(read_bytes(err), Catch::Contains("-: standard output is not supported"));
   // --png prev.png is the prefix prev: prev_32x32.png, not prev.png_32x32.png.
   CHECK(run_cli("-q remesh builtin:sphere --res 32 --no-psnr -o '" + (tmp.path / "r.ply").string() +
-                    "' --png '" + (tmp.path / "prev.png").string() + "'",
+                    "' --png '" + (tmp.path / "prev.png").string() + "' --report '" +
+                    (tmp.path / "r.json").string() + "'",
                 err) == 0);
   CHECK(fs::exists(tmp.path / "prev_32x32.png"));
+  // The report names the images it wrote (the summary named only the remesh).
+  const nlohmann::json report = nlohmann::json::parse(read_bytes(tmp.path / "r.json"));
+  CHECK(report["levels"][0]["images"] == nlohmann::json::array({(tmp.path / "prev_32x32.png").string()}));
   // A directory as the prefix wrote a file called _32x32.png into it.
   for (const std::string& dir : {tmp.path.string() + "/", tmp.path.string()}) {
     CHECK(run_cli("-q remesh builtin:sphere --res 32 --no-psnr -o '" + (tmp.path / "r2.ply").string() +

@@ -695,8 +695,9 @@ TEST_CASE("an exemplar too large to search at the scale asked for is refused wit
   so.pixels_per_texel = 1;
   CHECK_THROWS_WITH(
       synth::synthesize(atlas, pyramid, big, so),
-      Catch::StartsWith("exemplar too large at this scale: the 1100x1100 exemplar at 1 exemplar pixel") &&
-          Catch::Contains("(1.075 exemplar pixels per texel)"));
+      Catch::StartsWith(
+          "exemplar too large at this scale: the 1100x1100 exemplar at 1 exemplar pixel per texel") &&
+          Catch::Contains("(1.075 per texel)"));
   // The scale it names works.
   so.pixels_per_texel = 1.075;
   so.full_passes = 0;  // the search tree is built either way; the passes only take time
