@@ -282,9 +282,11 @@ void add_synth(CLI::App& app, Context& ctx, Action& action) {
   auto args = std::make_shared<SynthArgs>();
   CLI::App* sub = app.add_subcommand("synth", "Grow a texture from an exemplar image over the surface");
   sub->add_option("input", args->input, "Mesh file (OBJ/OFF/PLY/glTF) or builtin:NAME")->required();
-  sub->add_option("-o,--output", args->output,
-                  "OUT.glb or OUT.obj: writes OUT.glb, OUT.obj+mtl, OUT.png (the mesh on its iso-chart atlas) "
-                  "and OUT_mcgim.glb/.obj/.png (the textured geometry-image remesh)")
+  sub->add_option(
+         "-o,--output", args->output,
+         "OUT.glb or OUT.obj: writes OUT.glb, OUT.obj+mtl, OUT.png (the mesh on its iso-chart atlas) "
+         "and OUT_mcgim.glb/.obj/.png (the textured geometry-image remesh); spaces in OUT become '_' in "
+         "the .png and .mtl names, which an OBJ's material line cannot quote")
       ->required();
   sub->add_option("--exemplar", args->exemplar,
                   "Exemplar image (PNG/JPG/EXR: RGB, opaque RGBA or grey) or builtin:bricks|cells|weave|noise "
