@@ -38,6 +38,19 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
     ctx.warn(a.input, std::to_string(q.overlapping_pairs) +
                           " overlapping triangle pairs: the packing ratio counts their UV area twice");
   warn_sparse_chart(ctx, a.input, q.sparsest, "its surface gets almost no texels");
+  // "L2 stretch inf" alone left the reader to find the one flipped triangle among thousands.
+  if (q.stretch.flipped > 0) {
+    const int zero = q.stretch.degenerate;
+    std::ostringstream w;
+    w << "the stretch is infinite: ";
+    if (turned > 0)
+      w << turned
+        << (turned == 1 ? " UV triangle is flipped against its chart"
+                        : " UV triangles are flipped against their charts");
+    if (turned > 0 && zero > 0) w << " and ";
+    if (zero > 0) w << zero << (zero == 1 ? " UV triangle has" : " UV triangles have") << " zero area";
+    ctx.warn(a.input, w.str());
+  }
 
   nlohmann::json j;
   j["file"] = a.input;

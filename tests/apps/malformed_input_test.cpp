@@ -927,6 +927,14 @@ TEST_CASE("stats says when its packing ratio is not of the texture", "[cli]") {
   CHECK(run_cli("stats '" + overlap.string() + "'", err) == 0);
   CHECK_THAT(read_bytes(err),
              Catch::Contains("overlapping triangle pairs: the packing ratio counts their UV area twice"));
+  // "L2 stretch inf" alone did not say why.
+  const fs::path line = tmp.path / "line.obj";
+  std::ofstream(line) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 0.5 0\nvt 1 0\nvt 0.2 0\n"
+                         "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+  CHECK(run_cli("stats '" + line.string() + "'", err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains("the stretch is infinite: 2 UV triangles have zero area"));
+  CHECK(run_cli("stats '" + outside.string() + "'", err) == 0);
+  CHECK_THAT(read_bytes(err), !Catch::Contains("infinite"));
 }
 
 TEST_CASE("stats, sae and remesh --keep-chart-sizes name a chart shrunk to a speck", "[cli]") {
