@@ -131,9 +131,12 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
                           linf_measured <= a.options.max_linf * (1 + 1e-9) && s.flipped == 0 &&
                           s.overlapping_pairs == 0;
   if (a.options.max_charts > 0 && s.charts > a.options.max_charts)
-    ctx.warn(a.input, "the stretch bounds need " + std::to_string(s.charts) +
-                          " charts, more than --max-charts " + std::to_string(a.options.max_charts) +
-                          "; raise --max-l2 or --max-linf for fewer");
+    // Not only the bounds: every chart must be a disk, so a closed surface is split (a sphere
+    // into 6 whatever the bounds), and each separate piece is a chart of its own.
+    ctx.warn(a.input, "the atlas needs " + std::to_string(s.charts) + " charts, more than --max-charts " +
+                          std::to_string(a.options.max_charts) +
+                          " (--max-charts only adds charts): its pieces must be cut into disks that meet the "
+                          "stretch bounds; higher --max-l2 or --max-linf can make fewer");
   if (!bounds_met) {
     std::ostringstream w;
     w << "the atlas misses its bounds (" << (per_chart ? "its charts' " : "") << "L2 " << l2_measured
@@ -270,7 +273,10 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(16, 2896));
   sub->add_option("--max-l2", o.max_l2, "Bound on every chart's L2 stretch (1 = isometric)")->capture_default_str();
   sub->add_option("--max-linf", o.max_linf, "Bound on every chart's Linf stretch, shrink included")->capture_default_str();
-  sub->add_option("--max-charts", o.max_charts, "0: as few charts as the bounds allow; N: split until N charts")
+  sub->add_option(
+         "--max-charts", o.max_charts,
+         "0: as few charts as the bounds allow; N: split further until N charts (never fewer than the "
+         "bounds and disk-shaped charts need)")
       ->capture_default_str();
   sub->add_option("--width", o.pack.width, "Texture width in texels (packing)")->capture_default_str();
   sub->add_option("--height", o.pack.height, "Texture height in texels (packing)")->capture_default_str();

@@ -319,7 +319,9 @@ RawMesh to_raw_mesh(const Mesh& mesh, const std::string& source) {
 Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
   const std::string& src = raw.source;
   auto fail = [&](const std::string& message) { throw InputError(src, message); };
-  auto need_repair = [&](const std::string& message) { throw InputError(src, message + "; use repair"); };
+  auto need_repair = [&](const std::string& message) {
+    throw InputError(src, message + "; it needs repair, which is turned off (--no-repair)");
+  };
   report = ValidationReport{};
   report.warnings = raw.warnings;
   report.faces_without_uvs = raw.faces_without_uvs;

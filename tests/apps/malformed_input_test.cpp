@@ -244,7 +244,7 @@ TEST_CASE("repairable inputs: warnings and exit 0, or exit 2 with --no-repair", 
     const std::string text = read_bytes(err);
     CHECK(std::count(text.begin(), text.end(), '\n') == 1);
     CHECK_THAT(text, Catch::StartsWith("isocharts: error: " + input.string() + ": "));
-    CHECK_THAT(text, Catch::Contains("use repair"));
+    CHECK_THAT(text, Catch::Contains("it needs repair, which is turned off (--no-repair)"));
     CHECK_FALSE(fs::exists(out));
   }
 }
@@ -804,7 +804,7 @@ TEST_CASE("atlas says when the bounds need more charts than --max-charts, and ch
   const std::string out = " -o '" + (tmp.path / "a.obj").string() + "'";
   CHECK(run_cli("atlas builtin:sphere --max-charts 1" + out, err) == 0);
   const std::string warned = read_bytes(err);
-  CHECK_THAT(warned, Catch::Contains("builtin:sphere: the stretch bounds need") &&
+  CHECK_THAT(warned, Catch::Contains("builtin:sphere: the atlas needs") &&
                          Catch::Contains("charts, more than --max-charts 1"));
   CHECK(run_cli("atlas builtin:sphere --max-charts 40" + out, err) == 0);
   CHECK_THAT(read_bytes(err), !Catch::Contains("--max-charts"));

@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "geo_test_meshes.h"
 #include "isochart/builtin.h"
 #include "isochart/error.h"
 #include "isochart/stretch.h"
@@ -345,4 +346,17 @@ TEST_CASE("merging reports its rounds and can be cancelled between them", "[atla
     CHECK_THROWS_AS(build_atlas(sphere, o, stop), Cancelled);
     CHECK(rounds == 2);
   }
+}
+
+TEST_CASE("bounds of exactly 1 hold up to rounding: a flat patch is one chart", "[atlas]") {
+  // Laid out exactly, a plane measures Linf 1 + 4e-15: --max-linf 1 split a 200-triangle grid
+  // into 179 charts (eight.off into 1507 of its 1536 faces).
+  AtlasOptions o;
+  o.max_l2 = 1;
+  o.max_linf = 1;
+  o.pack.width = o.pack.height = 256;
+  const Atlas a = build_atlas(geo_test::grid(10, 10, 1.0, 1.37), o);
+  CHECK(a.num_charts() == 1);
+  CHECK(a.stats.linf <= 1 + 1e-9);
+  CHECK(a.stats.flipped == 0);
 }

@@ -187,7 +187,8 @@ TEST_CASE("polygons are triangulated without flips or lost area", "[validate]") 
   check_clean(m);
   REQUIRE(rep.warnings.size() == 1);
   CHECK_THAT(rep.warnings[0], Catch::Contains("triangulated 2 polygons into 7 triangles"));
-  CHECK_THAT(error_of(r, false), Catch::Contains("face 0 has 6 corners") && Catch::Contains("use repair"));
+  CHECK_THAT(error_of(r, false), Catch::Contains("face 0 has 6 corners") &&
+                                     Catch::Contains("it needs repair, which is turned off (--no-repair)"));
 }
 
 TEST_CASE("a large concave polygon is triangulated without flips", "[validate]") {
@@ -289,8 +290,8 @@ TEST_CASE("unreferenced vertices are dropped and attributes remapped", "[validat
   REQUIRE(m.uvs.size() == 3);  // the unused (0.5, 0.5) is dropped too
   CHECK(m.uvs[m.face_uvs[0][1]] == Vec2d{1, 0});
   CHECK(m.face_groups == std::vector<int>{7});
-  CHECK_THAT(error_of(r, false),
-             Catch::Contains("vertex 0 is used by no face") && Catch::Contains("use repair"));
+  CHECK_THAT(error_of(r, false), Catch::Contains("vertex 0 is used by no face") &&
+                                     Catch::Contains("it needs repair, which is turned off (--no-repair)"));
 }
 
 TEST_CASE("two closed surfaces touching along an edge are split apart, both closed", "[validate]") {
@@ -312,7 +313,8 @@ TEST_CASE("two closed surfaces touching along an edge are split apart, both clos
   CHECK(t.boundary_loops().empty());  // both stay closed
   CHECK(t.genus() == 0);
   CHECK(signed_volume(m) == Approx(2.0 / 6));
-  CHECK_THAT(error_of(r, false), Catch::Contains("edge (0,1) has 4 faces") && Catch::Contains("use repair"));
+  CHECK_THAT(error_of(r, false), Catch::Contains("edge (0,1) has 4 faces") &&
+                                     Catch::Contains("it needs repair, which is turned off (--no-repair)"));
 }
 
 TEST_CASE("a fin on an edge is separated into a manifold", "[validate]") {
@@ -352,7 +354,8 @@ TEST_CASE("orientation is made consistent and outward", "[validate]") {
   CHECK(rep.reoriented_faces == 3);
   CHECK(signed_volume(m) == Approx(1.0));
   check_clean(m);
-  CHECK_THAT(error_of(r, false), Catch::Contains("oriented inconsistently") && Catch::Contains("use repair"));
+  CHECK_THAT(error_of(r, false), Catch::Contains("oriented inconsistently") &&
+                                     Catch::Contains("it needs repair, which is turned off (--no-repair)"));
 
   // Inside out as a whole: every face flips, and the normals with them.
   RawMesh inside = cube_triangles();

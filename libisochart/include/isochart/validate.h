@@ -61,7 +61,7 @@ struct ValidationReport {
 /// Vertex ids in messages are the input's (0-based).
 /// \throw InputError (file = raw.source) for unrecoverable problems: empty mesh, NaN/Inf
 ///        values, indices out of range, faces with fewer than 3 corners, or any problem
-///        that needs a repair when `repair` is false (the message says "use repair").
+///        that needs a repair when `repair` is false (the message says "needs repair").
 Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report);
 
 }  // namespace isochart
