@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -159,6 +160,8 @@ isochart::Mesh load_any(const Context& ctx, const std::string& path, bool atlas 
 }
 
 std::string fmt(double x, int digits) {
+  // An exact remesh (a flat sliver) has infinite PSNR: not a failure, which reads "–".
+  if (x == std::numeric_limits<double>::infinity()) return "inf";
   if (!std::isfinite(x)) return "–";
   std::ostringstream s;
   s << std::fixed << std::setprecision(digits) << x;
@@ -166,6 +169,7 @@ std::string fmt(double x, int digits) {
 }
 
 std::string csv_num(double x, int digits) {
+  if (x == std::numeric_limits<double>::infinity()) return "inf";
   if (!std::isfinite(x)) return "";
   std::ostringstream s;
   s << std::setprecision(digits) << x;
@@ -512,7 +516,12 @@ std::string to_markdown(const std::vector<Row>& rows, const std::vector<SweepPoi
     const Row& ri = *i->second;
     const Row& rl = *l->second;
     if (!std::isfinite(ri.psnr) || !std::isfinite(rl.psnr)) {
-      f << "- " << m << ": no comparison (" << (std::isfinite(ri.psnr) ? rl.note : ri.note) << ")\n";
+      const Row& missing = std::isfinite(ri.psnr) ? rl : ri;
+      f << "- " << m << ": no comparison ("
+        << (std::isinf(ri.psnr) && std::isinf(rl.psnr) ? "both remeshes are exact (PSNR inf)"
+            : std::isinf(missing.psnr)                 ? missing.method + "'s remesh is exact (PSNR inf)"
+                                                       : missing.note)
+        << ")\n";
       continue;
     }
     const double dp = ri.psnr - rl.psnr;

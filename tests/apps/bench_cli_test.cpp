@@ -312,3 +312,30 @@ TEST_CASE("bench: equal PSNR is a tie, not a win for lscm", "[bench]") {
   CHECK_THAT(md, Catch::Contains("PSNR isochart − lscm = 0.00 dB") && Catch::Contains("a tie on PSNR"));
   CHECK(md.find("lscm wins") == std::string::npos);
 }
+
+TEST_CASE("bench: an exact remesh reads PSNR inf, not a failure", "[bench]") {
+  // A flat strip 4e4 times as long as wide: both remeshes reproduce it exactly. The table
+  // showed "–", the CSV nothing and the summary "no comparison ()".
+  const fs::path dir = fresh_dir("exact");
+  const fs::path mesh = dir / "strip.obj", out = dir / "out", err = dir / "stderr.txt";
+  {
+    std::ofstream f(mesh);
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i <= 40; ++i) f << "v " << 0.025 * i << " " << 5e-5 * j << " 0\n";
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 40; ++i) {
+        const int a = j * 41 + i + 1;
+        f << "f " << a << " " << a + 1 << " " << a + 42 << "\nf " << a << " " << a + 42 << " " << a + 41
+          << "\n";
+      }
+  }
+  REQUIRE(run_cli("-q bench '" + mesh.string() +
+                      "' --methods isochart,lscm --res 32 --sweep none --no-plots --out '" + out.string() +
+                      "'",
+                  err) == 0);
+  const auto rows = read_csv(out / "bench.csv");
+  REQUIRE(rows.size() == 2);
+  for (const auto& r : rows) CHECK(r.at("psnr_db") == "inf");
+  const std::string md = slurp(out / "bench.md");
+  CHECK_THAT(md, Catch::Contains("| inf |") && Catch::Contains("both remeshes are exact (PSNR inf)"));
+}
