@@ -316,7 +316,7 @@ class Bench {
     const mcgim::DistanceResult d = mcgim::measure_distance(b.geometry, lv.remesh.mesh, dopt, ctx_.progress());
     r.psnr = d.psnr;
     r.s_psnr = d.seconds;
-    // A blank stretch cell needs its reason (one turned triangle of thousands makes it infinite).
+    // An infinite stretch needs its reason (one turned triangle of thousands makes it infinite).
     if (!std::isfinite(r.l2)) {
       const std::string why = std::to_string(at.stats.flipped) +
                               (at.stats.flipped == 1 ? " UV triangle flipped or collapsed"
