@@ -38,6 +38,9 @@ void run_info(const Context& ctx, const InfoArgs& a) {
   j["unreferenced_vertices"] = rep.unreferenced_vertices;
   j["polygons_triangulated"] = rep.polygons;
   j["reoriented_faces"] = rep.reoriented_faces;
+  // A Möbius strip is cut open to be oriented: the topology above is the cut surface's (a disk).
+  j["orientable"] = rep.cut_edges == 0;
+  j["cut_edges"] = rep.cut_edges;
   j["repaired_vertices"] = m.num_vertices();
   j["repaired_faces"] = m.num_faces();
   j["edges"] = topo.num_edges();
@@ -64,6 +67,12 @@ void run_info(const Context& ctx, const InfoArgs& a) {
     << "  boundary loops       " << topo.boundary_loops().size() << "\n"
     << "  genus                " << topo.genus() << "\n"
     << "  euler characteristic " << topo.euler_characteristic() << "\n"
+    << "  orientable           "
+    << (rep.cut_edges == 0
+            ? std::string("yes")
+            : "no (cut open along " + std::to_string(rep.cut_edges) +
+                  (rep.cut_edges == 1 ? " edge" : " edges") + "; the counts above are of the cut surface)")
+    << "\n"
     << "  non-manifold edges   " << rep.nonmanifold_edges << "\n"
     << "  non-manifold vertices " << rep.nonmanifold_vertices << "\n"
     << "  degenerate faces     " << rep.degenerate_faces << "\n"

@@ -249,6 +249,36 @@ TEST_CASE("repairable inputs: warnings and exit 0, or exit 2 with --no-repair", 
   }
 }
 
+TEST_CASE("info says a Moebius strip is not orientable", "[cli]") {
+  // It is cut open to be oriented, so its counts read as a disk's, with only a repair warning.
+  TempDir tmp("moebius");
+  const fs::path mesh = tmp.path / "m.obj", out = tmp.path / "r.json", err = tmp.path / "err.txt";
+  {
+    const int n = 24;
+    std::ofstream f(mesh);
+    for (int i = 0; i < n; ++i) {
+      const double t = 2 * M_PI * i / n;
+      for (int w : {-1, 1})
+        f << "v " << (2 + 0.5 * w * std::cos(t / 2)) * std::cos(t) << " "
+          << (2 + 0.5 * w * std::cos(t / 2)) * std::sin(t) << " " << 0.5 * w * std::sin(t / 2) << "\n";
+    }
+    for (int i = 0; i < n; ++i) {
+      const int a = 2 * i + 1, b = a + 1;
+      // Round the strip once, its two edges trade places.
+      const int c = i + 1 < n ? a + 2 : 2, d = i + 1 < n ? b + 2 : 1;
+      f << "f " << a << " " << c << " " << d << "\nf " << a << " " << d << " " << b << "\n";
+    }
+  }
+  REQUIRE(run_cli("info '" + mesh.string() + "' --report '" + out.string() + "'", err) == 0);
+  nlohmann::json j = nlohmann::json::parse(read_bytes(out));
+  CHECK(j["orientable"] == false);
+  CHECK(j["cut_edges"].get<int>() >= 1);
+  REQUIRE(run_cli("info builtin:torus --report '" + out.string() + "'", err) == 0);
+  j = nlohmann::json::parse(read_bytes(out));
+  CHECK(j["orientable"] == true);
+  CHECK(j["cut_edges"] == 0);
+}
+
 TEST_CASE("the report is written atomically next to a good input", "[cli]") {
   TempDir tmp("report");
   const fs::path input = tmp.path / "tetra.obj", out = tmp.path / "report.json", err = tmp.path / "err.txt";
