@@ -881,6 +881,15 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
                           {{"atlas", r.s_atlas}, {"packing", r.s_pack}, {"mcgim", r.s_mcgim}, {"psnr", r.s_psnr}}},
                          {"note", r.note}});
   }
+  // The sweep was only in sweep.csv and bench.md.
+  j["sweep"] = nlohmann::json::array();
+  for (const SweepPoint& p : bench.sweep_points())
+    j["sweep"].push_back({{"mesh", p.mesh},
+                          {"method", p.method},
+                          {"bound", p.bound},
+                          {"charts", p.charts},
+                          {"l2", std::isfinite(p.l2) ? nlohmann::json(p.l2) : nlohmann::json()}});
+  j["plots"] = plots;
   j["out"] = a.out;
   j["seconds"] = total;
   j["seed"] = ctx.opts.seed;

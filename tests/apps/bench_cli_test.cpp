@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -102,10 +103,12 @@ TEST_CASE("bench: every method lands within 2% of the reference's defined sample
   const fs::path err = dir / "stderr.txt";
   const fs::path out = dir / "out";
   REQUIRE(run_cli("bench builtin:torus --methods isochart,lscm,lscm+stretch,isomap-nocut --res 64 "
-                  "--psnr-samples 20000 --sweep 1.1,1.4 --pack-res 256 --out '" + out.string() + "'",
+                  "--psnr-samples 20000 --sweep 1.1,1.4 --pack-res 256 --out '" +
+                      out.string() + "' --report '" + (dir / "r.json").string() + "'",
                   err) == 0);
   const auto rows = read_csv(out / "bench.csv");
   REQUIRE(rows.size() == 4);
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "r.json"));
   const long long target = std::stoll(rows[0].at("defined_samples"));
   CHECK(rows[0].at("width") == "64");
   for (const auto& r : rows) {
@@ -130,6 +133,11 @@ TEST_CASE("bench: every method lands within 2% of the reference's defined sample
     CHECK(sweep[i].at("max_l2") == "1.1");
     CHECK(sweep[i + 1].at("max_l2") == "1.4");
     CHECK(std::isfinite(std::stod(sweep[i].at("l2"))));
+    // The report carries the sweep too (it was only in sweep.csv and bench.md).
+    for (std::size_t k : {i, i + 1}) {
+      CHECK(report["sweep"][k]["method"] == sweep[k].at("method"));
+      CHECK(report["sweep"][k]["charts"] == std::stoi(sweep[k].at("charts")));
+    }
     if (sweep[i].at("method") == "lscm") {
       CHECK(std::stod(sweep[i].at("l2")) <= 1.1);
       CHECK(std::stoi(sweep[i + 1].at("charts")) <= std::stoi(sweep[i].at("charts")));
@@ -138,6 +146,7 @@ TEST_CASE("bench: every method lands within 2% of the reference's defined sample
   const std::string md = slurp(out / "bench.md");
   CHECK(md.find("| torus | 5184 | lscm+stretch |") != std::string::npos);
   CHECK(md.find("![psnr.png](psnr.png)") != std::string::npos);
+  CHECK(report["plots"] == nlohmann::json::array({"psnr.png", "stretch_torus.png"}));
   // The outputs and nothing else: atomic writes leave no temporary files behind.
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(out)) names.push_back(e.path().filename().string());
