@@ -146,7 +146,7 @@ void Context::check_image_outputs(const std::vector<std::string>& paths) const {
 isochart::LoadResult Context::load(const std::string& path, bool atlas) const {
   isochart::LoadOptions lo;
   lo.repair = !opts.no_repair;
-  lo.weld = atlas;
+  lo.weld = atlas || opts.weld;
   isochart::LoadResult r = isochart::load_mesh(path, lo);
   for (const auto& w : r.report.warnings) warn(path, w);
   return r;

@@ -30,6 +30,7 @@ struct GlobalOptions {
   bool json = false;        // print the result as one JSON object
   std::string report;       // also save the JSON result here
   bool no_repair = false;   // treat repairable mesh problems as errors
+  bool weld = false;        // join vertices at identical positions in every input
 };
 
 /// Shared state handed to subcommands.

@@ -29,6 +29,9 @@ int main(int argc, char** argv) {
   app.add_option("--report", ctx.opts.report, "Also save the JSON result to this file");
   app.add_flag("--no-repair", ctx.opts.no_repair,
                "Treat repairable mesh problems (non-manifold, degenerate faces, ...) as errors");
+  app.add_flag(
+      "--weld", ctx.opts.weld,
+      "Join vertices at identical positions (a triangle soup, a mesh split at its UV seams), as for glTF");
 
   cli::Action action;
   cli::add_info(app, ctx, action);

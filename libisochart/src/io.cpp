@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <charconv>
@@ -256,6 +257,35 @@ RawMesh read_raw_mesh(const std::string& path, const LoadOptions& options) {
   throw Error("unhandled mesh format");
 }
 
+namespace {
+
+// Used vertices at the bit-identical position of an earlier used vertex (−0 equal to +0).
+long long count_coincident(const RawMesh& raw) {
+  const long long nv = static_cast<long long>(raw.positions.size());
+  std::vector<char> used(raw.positions.size(), 0);
+  for (const auto& poly : raw.polygons)
+    for (int v : poly)
+      if (v >= 0 && v < nv) used[v] = 1;
+  std::vector<std::array<double, 3>> p;
+  p.reserve(raw.positions.size());
+  for (long long v = 0; v < nv; ++v)
+    if (used[v]) {
+      std::array<double, 3> x;
+      for (int i = 0; i < 3; ++i) {
+        // NaN would break the sort's ordering; validation rejects the file anyway.
+        if (!std::isfinite(raw.positions[v][i])) return 0;
+        x[i] = raw.positions[v][i] == 0 ? 0.0 : raw.positions[v][i];
+      }
+      p.push_back(x);
+    }
+  std::sort(p.begin(), p.end());
+  long long n = 0;
+  for (std::size_t i = 1; i < p.size(); ++i) n += p[i] == p[i - 1] ? 1 : 0;
+  return n;
+}
+
+}  // namespace
+
 LoadResult load_mesh(const std::string& path, const LoadOptions& options) {
   RawMesh raw = read_raw_mesh(path, options);
   const MeshFormat fmt = format_from_path(path);
@@ -266,7 +296,15 @@ LoadResult load_mesh(const std::string& path, const LoadOptions& options) {
     triangles += std::max<long long>(1, static_cast<long long>(poly.size()) - 2);
   check_face_limit(path, triangles, options);
   LoadResult r;
+  const bool welded = options.weld || fmt == MeshFormat::Gltf || fmt == MeshFormat::Glb;
+  const long long coincident = welded ? 0 : count_coincident(raw);
   r.mesh = validate_mesh(raw, options.repair, r.report);
+  r.report.coincident_vertices = coincident;
+  if (coincident > 0)
+    r.report.warnings.push_back(std::to_string(coincident) +
+                                (coincident == 1 ? " vertex lies" : " vertices lie") +
+                                " at the position of another vertex without being joined to it, so the "
+                                "surface is cut there (--weld joins them)");
   return r;
 }
 

@@ -279,6 +279,25 @@ TEST_CASE("info says a Moebius strip is not orientable", "[cli]") {
   CHECK(j["cut_edges"] == 0);
 }
 
+TEST_CASE("a triangle soup is named, and --weld joins it", "[cli]") {
+  // An OBJ written one triangle at a time read as one piece per triangle (a torus: 1024 charts)
+  // without a word.
+  TempDir tmp("soup");
+  const fs::path soup = tmp.path / "soup.obj", out = tmp.path / "r.json", err = tmp.path / "err.txt";
+  std::ofstream(soup) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 0 0\nv 1 1 0\nv -0 1 0\nf 1 2 3\nf 4 5 6\n";
+  REQUIRE(run_cli("info '" + soup.string() + "' --report '" + out.string() + "'", err) == 0);
+  nlohmann::json j = nlohmann::json::parse(read_bytes(out));
+  CHECK(j["components"] == 2);
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("2 vertices lie at the position of another vertex without being "
+                             "joined to it, so the surface is cut there (--weld joins them)"));
+  REQUIRE(run_cli("--weld info '" + soup.string() + "' --report '" + out.string() + "'", err) == 0);
+  j = nlohmann::json::parse(read_bytes(out));
+  CHECK(j["components"] == 1);
+  CHECK(j["boundary_loops"] == 1);
+  CHECK(read_bytes(err).empty());
+}
+
 TEST_CASE("the report is written atomically next to a good input", "[cli]") {
   TempDir tmp("report");
   const fs::path input = tmp.path / "tetra.obj", out = tmp.path / "report.json", err = tmp.path / "err.txt";

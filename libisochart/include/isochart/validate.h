@@ -40,6 +40,9 @@ struct ValidationReport {
   int cut_edges = 0;                  ///< edges cut open because no consistent orientation exists
   int components = 0;                 ///< edge-connected components after repair
   long long faces_without_uvs = 0;    ///< faces the file gave no texture coordinates (they read (0, 0))
+  /// Used vertices at the bit-identical position of another, not joined to it (LoadOptions::weld
+  /// joins them): a triangle soup reads as one piece per triangle.
+  long long coincident_vertices = 0;
   std::vector<std::string> warnings;  ///< one line per repair, for the CLI to print
 };
 
