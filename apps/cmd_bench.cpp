@@ -933,7 +933,9 @@ void add_bench(CLI::App& app, Context& ctx, Action& action) {
       ->capture_default_str();
   sub->add_flag("--no-plots", args->no_plots, "Do not draw the PNG plots");
   sub->footer(
-      "Every atlas is packed by our packer and measured the same way. Per mesh, the first method's MCGIM is "
+      "Every atlas is packed by our packer and measured the same way (the packer starts from each chart's "
+      "orientation as given, so an atlas read back from a file can pack a few percent differently from the "
+      "same charts as built). Per mesh, the first method's MCGIM is "
       "RES×RES; every other method's resolution is chosen so its defined samples match within 2% "
       "(Iso-charts Table II). A failing run is reported as 'n/a: reason' in its row.\n"
       "Examples:\n"
