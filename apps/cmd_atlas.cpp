@@ -115,8 +115,22 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   const auto& s = atlas.stats;
   // Every chart is accepted only within the bounds; the whole can still miss them where the
   // numbers cannot hold a triangle's shape (a sliver 1e-16 of its length high). Say so.
-  // Signal atlases bound the signal-metric stretch; geometrically they keep --max-geometric-l2.
-  const double l2_bound = a.signal.empty() ? a.options.max_l2 : a.signal_options.max_geometric_l2;
+  // Signal atlases bound the signal-metric stretch; geometrically their charts keep
+  // --max-geometric-l2 (full), or were built to --max-l2 and keep their geometric
+  // parameterization where the signal one cannot meet --max-geometric-l2 (param).
+  const isochart::SignalUse use = a.signal_options.use;
+  const double max_gl2 = a.signal_options.max_geometric_l2;
+  const double l2_bound = a.signal.empty() || use == isochart::SignalUse::None ? a.options.max_l2
+                          : use == isochart::SignalUse::Param ? std::max(a.options.max_l2, max_gl2)
+                                                              : max_gl2;
+  if (!a.signal.empty() && use == isochart::SignalUse::Param && max_gl2 < a.options.max_l2 &&
+      sig_stats.reverted_charts > 0)
+    ctx.warn(a.input, std::to_string(sig_stats.reverted_charts) + " of " + std::to_string(s.charts) +
+                          " charts keep their geometric parameterization: --signal-use param builds charts "
+                          "to --max-l2 " +
+                          plain_number(a.options.max_l2) + ", above --max-geometric-l2 " +
+                          plain_number(max_gl2) +
+                          ", and their signal parameterization could not meet the latter");
   // A signal atlas packs its charts at the densities the signal asks for, so measured as one
   // texture its charts read as shrunk against each other (bunny_lowres: Linf 5.64 with every
   // chart within 4.81 of bound 5). Its bounds are each chart's, measured at its own density.

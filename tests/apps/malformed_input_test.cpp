@@ -1135,6 +1135,28 @@ TEST_CASE("a signal atlas's stretch bounds are its charts', each at its own dens
   CHECK(j["linf_stretch"].get<double>() > 5.0);
 }
 
+TEST_CASE("signal-use param under a geometric bound below --max-l2 says which charts kept theirs", "[cli]") {
+  // Its charts are built to --max-l2; those whose signal parameterization cannot meet a lower
+  // --max-geometric-l2 keep the geometric one. That read as "misses its bounds: some triangles
+  // are too thin for the coordinates' precision".
+  TempDir tmp("param_bounds");
+  const fs::path err = tmp.path / "err.txt", report = tmp.path / "r.json";
+  REQUIRE(
+      run_cli(
+          "--report '" + report.string() +
+              "' atlas builtin:sphere --signal normals --signal-use param --max-geometric-l2 1.0001 -o '" +
+              (tmp.path / "a.obj").string() + "'",
+          err) == 0);
+  const std::string text = read_bytes(err);
+  CHECK_THAT(text, !Catch::Contains("misses its bounds"));
+  CHECK_THAT(text, Catch::Contains("charts keep their geometric parameterization: --signal-use param builds "
+                                   "charts to --max-l2 1.1, above --max-geometric-l2 1.0001"));
+  const nlohmann::json j = nlohmann::json::parse(read_bytes(report));
+  CHECK(j["bounds_met"] == true);
+  CHECK(j["chart_l2_max"].get<double>() <= 1.1);
+  CHECK(j["signal"]["reverted_charts"].get<int>() >= 1);
+}
+
 TEST_CASE("sae warns when the UVs leave the texture, overlap or collapse", "[cli]") {
   TempDir tmp("sae_warnings");
   const fs::path atlas = tmp.path / "a.obj", outside = tmp.path / "outside.obj", err = tmp.path / "err.txt";
