@@ -72,6 +72,11 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     else if (a.signal_use == "param") a.signal_options.use = isochart::SignalUse::Param;
     else if (a.signal_use == "full") a.signal_options.use = isochart::SignalUse::Full;
     else bad_option("--signal-use must be none, param or full");
+    // Chart building by the signal is what --signal-use full adds; elsewhere these change nothing.
+    if (a.signal_options.use != isochart::SignalUse::Full)
+      for (const char* name : {"--beta", "--chart-lambda", "--split-efficiency"})
+        if (a.given.has(name))
+          bad_option(std::string(name) + " goes with --signal-use full (it shapes the charts)");
     check_signal_uvs(a.signal, in, a.input);
     signal = isochart::make_signal(in.mesh, a.signal, a.input);
     if (!a.imt_out.empty()) isochart::write_imt(a.imt_out, isochart::face_imt(in.mesh, signal));

@@ -26,6 +26,7 @@ struct SaeArgs {
   int height = 0;
   std::string texture_out;
   std::string imt_out;
+  GivenOptions given;
 };
 
 // Normals in [-1, 1] become displayable colours; colours and textures are written as they are.
@@ -40,6 +41,7 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   // A lone --width gave a texture of that width and --res's height: 2048x256 for a square atlas.
   if ((a.width > 0) != (a.height > 0)) bad_option("--width and --height go together");
+  if (a.width > 0 && a.given.has("--res")) bad_option("--res and --width/--height are exclusive");
   const int width = a.width > 0 ? a.width : a.res;
   const int height = a.height > 0 ? a.height : a.res;
   ctx.check_paths({a.input, a.source, signal_texture(a.signal)}, {a.texture_out, a.imt_out});
@@ -214,7 +216,10 @@ void add_sae(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--texture-out", args->texture_out, "Write the baked signal texture (normals as 0.5n+0.5)");
   sub->add_option("--imt-out", args->imt_out, "Write the per-face IMT (g00 g01 g11 per line)");
   sub->footer("Example: isocharts sae bunny_atlas.obj --signal normals --res 256 --json");
-  sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_sae(ctx, *args); }; });
+  sub->callback([&ctx, args, sub, &action] {
+    args->given.record(sub, {"--res"});
+    action = [&ctx, args] { run_sae(ctx, *args); };
+  });
 }
 
 }  // namespace cli

@@ -115,7 +115,7 @@ def main():
             out, seconds = run([a.bin, "--threads", str(a.threads), "--json", "-q", "atlas", path, "-o", obj,
                                 "--width", str(a.res), "--height", str(a.res), "--signal", signal,
                                 "--signal-use", use, "--sae-res", str(a.res), "--signal-texture-out", tex] +
-                               (["--beta", str(a.beta)] if a.beta is not None else []))
+                               (["--beta", str(a.beta)] if a.beta is not None and use == "full" else []))
             j = json.loads(out)
             row[use] = {"sae": j["sae"], "signal_stretch": j["signal"]["signal_stretch"], "charts": j["charts"],
                         "l2": j["l2_stretch"], "linf": j["linf_stretch"], "flipped": j["flipped"],

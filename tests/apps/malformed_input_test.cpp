@@ -862,6 +862,14 @@ TEST_CASE("atlas says when the bounds need more charts than --max-charts, and ch
   // Refused when parsed, not after the signal was built, and not blamed on the mesh file.
   CHECK(run_cli("atlas builtin:sphere --signal normals --beta 2" + out, err) == 2);
   CHECK(read_bytes(err) == "isocharts: error: --beta: expected a number from 0 to 1, got '2'\n");
+  // Options that shape the charts do nothing where the signal does not build them.
+  for (const char* use : {"none", "param"}) {
+    CHECK(run_cli(std::string("atlas builtin:sphere --signal normals --beta 0.3 --signal-use ") + use + out,
+                  err) == 2);
+    CHECK(read_bytes(err) == "isocharts: error: --beta goes with --signal-use full (it shapes the charts)\n");
+  }
+  CHECK(run_cli("sae builtin:sphere --res 256 --width 100 --height 100", err) == 2);
+  CHECK(read_bytes(err) == "isocharts: error: --res and --width/--height are exclusive\n");
   CHECK(run_cli("atlas builtin:sphere --signal normals --lambda -1" + out, err) == 2);
   CHECK(read_bytes(err) == "isocharts: error: --lambda: expected a number >= 0, got '-1'\n");
   // sae's limit: 16384² took 6.3 GB after the whole atlas was built.
