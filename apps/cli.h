@@ -177,12 +177,13 @@ isochart::MeshFormat output_mesh_format(const std::string& path,
 /// \throw InputError(file, ...) when it does not.
 void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atlas, const std::string& file);
 
-/// Warns "texture coordinates reach outside [0, 1] (u0, v0) to (u1, v1); " + `consequence` when
-/// the atlas's UVs (q.uv_min, q.uv_max) leave the unit square.
 /// Warns about a chart with under 1 % of the texels its surface area would get (a chart shrunk
 /// to a speck by a broken atlas), saying `consequence`.
 void warn_sparse_chart(const Context& ctx, const std::string& file, const isochart::ChartDensity& d,
                        const std::string& consequence);
+
+/// Warns "texture coordinates reach outside [0, 1] (u0, v0) to (u1, v1); " + `consequence` when
+/// the atlas's UVs (q.uv_min, q.uv_max) leave the unit square.
 void warn_uvs_outside(const Context& ctx, const std::string& file, const isochart::AtlasQuality& q,
                       const std::string& consequence);
 

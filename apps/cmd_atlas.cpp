@@ -12,6 +12,7 @@
 #include "isochart/image.h"
 #include "isochart/render.h"
 #include "isochart/signal.h"
+#include "isochart/stretch.h"
 
 namespace cli {
 
@@ -146,9 +147,9 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   }
   const bool per_chart = !a.signal.empty();
   const double l2_measured = per_chart ? chart_l2 : s.l2, linf_measured = per_chart ? chart_linf : s.linf;
-  const bool bounds_met = l2_measured <= l2_bound * (1 + 1e-9) &&
-                          linf_measured <= a.options.max_linf * (1 + 1e-9) && s.flipped == 0 &&
-                          s.overlapping_pairs == 0;
+  const bool bounds_met = l2_measured <= l2_bound * isochart::kStretchBoundSlack &&
+                          linf_measured <= a.options.max_linf * isochart::kStretchBoundSlack &&
+                          s.flipped == 0 && s.overlapping_pairs == 0;
   if (a.options.max_charts > 0 && s.charts > a.options.max_charts)
     // Not only the bounds: every chart must be a disk, so a closed surface is split (a sphere
     // into 6 whatever the bounds), and each separate piece is a chart of its own.

@@ -316,9 +316,7 @@ void evaluate(const ChartGeometry& g, ChartParam& p, const ParamOptions& o, cons
   p.linf = st.linf;
   p.flipped = st.flipped;
   p.overlaps = false;
-  // Bounds hold up to rounding: two triangles unfolded exactly measure Linf 1 + 1e-15, and
-  // --max-linf 1 then gave every triangle a chart of its own.
-  constexpr double kSlack = 1 + 1e-9;
+  constexpr double kSlack = kStretchBoundSlack;  // bounds hold up to rounding
   const double max_l2 = o.max_l2 * kSlack, max_linf = o.max_linf * kSlack;
   bool geometric_ok = true;
   if (o.face_metric) {

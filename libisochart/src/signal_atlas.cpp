@@ -68,7 +68,8 @@ bool reoptimize(detail::AtlasChart& c, const std::vector<Imt>& metric, const Atl
   opt.face_metric = local_metric(c, metric);
   optimize_stretch(c.positions, c.tris, uv, opt);
   const StretchStats st = measure_stretch(c.positions, c.tris, uv);
-  if (st.flipped > 0 || !(st.linf <= o.max_linf * (1 + 1e-9)) || !(st.l2 <= max_geometric_l2 * (1 + 1e-9)))
+  if (st.flipped > 0 || !(st.linf <= o.max_linf * kStretchBoundSlack) ||
+      !(st.l2 <= max_geometric_l2 * kStretchBoundSlack))
     return false;
   if (!uv_layout_is_embedding(c.tris, uv)) {
     std::vector<std::array<Vec2d, 3>> tris(c.tris.size());

@@ -8,6 +8,10 @@
 
 namespace isochart {
 
+/// A stretch bound b is met by values up to b · kStretchBoundSlack: a plane laid out exactly
+/// measures Linf 1 + 4e-15, and --max-linf 1 without the slack gave every triangle a chart.
+constexpr double kStretchBoundSlack = 1 + 1e-9;
+
 /// Stretch of one triangle's map from texture space to the surface. Γ and γ are the
 /// largest and smallest singular values of its Jacobian. Not normalized.
 struct TriangleStretch {
