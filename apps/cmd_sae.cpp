@@ -1,6 +1,7 @@
 // `isocharts sae MESH_WITH_UV --signal normals --res 256`: the signal approximation error of an
 // atlas (Iso-charts §9.3).
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <map>
@@ -54,7 +55,34 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
     // The SAE bakes the signal into one texture through the UVs: where they leave it, overlap
     // or collapse, texels are shared or clamped and the figure says little about the atlas.
     const isochart::AtlasQuality q = isochart::measure_atlas(mesh);
-    warn_uvs_outside(ctx, a.input, q, "they are clamped to the texture's edge");
+    // Texels exist only inside [0, 1]²: a triangle past the edge bakes nothing there, and its
+    // samples read the edge's texels, which hold other triangles' signal or none.
+    int off = 0, past = 0;
+    for (const auto& f : mesh.face_uvs) {
+      bool out = false, in_x = false, in_y = false;
+      double lo_x = 1e300, hi_x = -1e300, lo_y = 1e300, hi_y = -1e300;
+      for (int c = 0; c < 3; ++c) {
+        const isochart::Vec2d& t = mesh.uvs[f[c]];
+        out = out || t.x < 0 || t.x > 1 || t.y < 0 || t.y > 1;
+        lo_x = std::min(lo_x, t.x), hi_x = std::max(hi_x, t.x);
+        lo_y = std::min(lo_y, t.y), hi_y = std::max(hi_y, t.y);
+      }
+      in_x = hi_x >= 0 && lo_x <= 1;
+      in_y = hi_y >= 0 && lo_y <= 1;
+      if (!(in_x && in_y))
+        ++off;
+      else if (out)
+        ++past;
+    }
+    if (off == static_cast<int>(mesh.face_uvs.size()))
+      throw isochart::InputError(a.input,
+                                 "texture coordinates lie wholly outside [0, 1]; no texel of the texture "
+                                 "would hold the signal");
+    if (off + past > 0)
+      warn_uvs_outside(ctx, a.input, q,
+                       std::to_string(off + past) + " of " + std::to_string(mesh.face_uvs.size()) +
+                           " triangles reach past the texture's edge, where they get no texels and read the "
+                           "edge's instead, which raises the SAE");
     // An 8:1 atlas baked into a square texture reads as twice the signal stretch it has.
     read_texture_aspect(ctx, a.input, mesh, static_cast<double>(width) / height,
                         "the texture measured is " + std::to_string(width) + "x" + std::to_string(height));

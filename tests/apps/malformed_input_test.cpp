@@ -1181,6 +1181,22 @@ TEST_CASE("sae warns when the UVs leave the texture, overlap or collapse", "[cli
   CHECK_THAT(read_bytes(err), !Catch::Contains("warning"));
   CHECK(run_cli("sae '" + outside.string() + "' --res 64", err) == 0);
   CHECK_THAT(read_bytes(err), Catch::Contains("outside.obj: texture coordinates reach outside [0, 1]"));
+  // The warning said "clamped" while the triangles past the edge baked nothing.
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("triangles reach past the texture's edge, where they get no texels"));
+  // Shifted off the texture altogether, nothing is baked: SAE equalled the signal's RMS.
+  const fs::path shifted = tmp.path / "shifted.obj";
+  write_bytes(shifted, edited_sphere_atlas(atlas, err, [](std::string& line) {
+                if (line.rfind("vt ", 0) == 0) {
+                  std::istringstream uv(line.substr(3));
+                  double u = 0, v = 0;
+                  uv >> u >> v;
+                  line = "vt " + std::to_string(u + 1.5) + " " + std::to_string(v);
+                }
+                return true;
+              }));
+  CHECK(run_cli("sae '" + shifted.string() + "' --res 64", err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("shifted.obj: texture coordinates lie wholly outside [0, 1]"));
 }
 
 TEST_CASE("directories, '-' and image prefixes with an extension are named for what they are", "[cli]") {
