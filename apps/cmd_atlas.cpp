@@ -31,7 +31,7 @@ struct AtlasArgs {
   std::string signal_use = "full";
   std::string imt_out;
   std::string signal_texture_out;
-  int sae_res = 256;
+  int sae_res = 0;  // 0: the packing size (--width x --height)
   isochart::SignalAtlasOptions signal_options;
   GivenOptions given;
 };
@@ -97,10 +97,16 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   }();
   const isochart::Mesh out_mesh = atlas.apply_to(in.mesh);
   // The SAE's texture has the atlas's shape and about --sae-res² texels: a 4:1 atlas baked into a
-  // square texture measured twice the SAE of the same charts packed square.
+  // square texture measured twice the SAE of the same charts packed square. By default it is
+  // the texture the atlas was packed for: measured at 256² a 1024² atlas's gutters and chart
+  // borders weigh four times more, and the ranking of signal atlases against geometric ones
+  // reversed (builtin:face, builtin:torus).
+  // Past 4096² texels (about 400 MB to bake) the default keeps the shape at that size.
   const double aspect = static_cast<double>(a.options.pack.width) / a.options.pack.height;
-  const int sae_w = std::clamp(static_cast<int>(std::lround(a.sae_res * std::sqrt(aspect))), 1, 8192);
-  const int sae_h = std::clamp(static_cast<int>(std::lround(a.sae_res / std::sqrt(aspect))), 1, 8192);
+  const double packed = std::sqrt(double(a.options.pack.width) * a.options.pack.height);
+  const double res = a.sae_res > 0 ? a.sae_res : std::min(packed, 4096.0);
+  const int sae_w = std::clamp(static_cast<int>(std::lround(res * std::sqrt(aspect))), 1, 8192);
+  const int sae_h = std::clamp(static_cast<int>(std::lround(res / std::sqrt(aspect))), 1, 8192);
   if (!a.signal.empty()) {
     isochart::Image baked;
     sae = isochart::signal_approximation_error(out_mesh, signal, sae_w, sae_h,
@@ -338,12 +344,11 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
   // The same limit as sae's --res: 8192² takes 1.5 GB, 16384² took 6.3 GB.
   sub->add_option("--sae-res", args->sae_res,
                   "Texture size at which the SAE is reported (about this many texels squared, in the "
-                  "--width:--height shape)")
-      ->check(CLI::Range(1, 8192))
-      ->capture_default_str();
+                  "--width:--height shape; default: the packing size, at most 4096 squared)")
+      ->check(CLI::Range(1, 8192));
   sub->add_option("--imt-out", args->imt_out, "Write the per-face IMT (g00 g01 g11 per line)");
   sub->add_option("--signal-texture-out", args->signal_texture_out,
-                  "Write the signal baked into the atlas at --sae-res (normals as 0.5n+0.5)");
+                  "Write the signal baked into the atlas at the SAE's size (normals as 0.5n+0.5)");
   sub->footer("Example: isocharts atlas builtin:creature -o creature_atlas.obj --png creature_atlas.png");
   sub->callback([&ctx, args, sub, &action] {
     args->given.record(sub, {"--png-size"});
