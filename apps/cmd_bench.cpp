@@ -352,7 +352,10 @@ class Bench {
         if (externals.empty()) {
           // No atlas from another tool for this mesh: silently skipped among other methods,
           // but a run asking only for them says so rather than printing an empty table.
-          if (methods_.size() > 1) continue;
+          if (methods_.size() > 1) {
+            without_baselines_.push_back(name);
+            continue;
+          }
           Row r;
           r.mesh = name;
           r.faces = mesh.num_faces();
@@ -435,6 +438,8 @@ class Bench {
 
   const std::vector<Row>& rows() const { return rows_; }
   const std::vector<SweepPoint>& sweep_points() const { return sweep_; }
+  /// Meshes whose `external` rows were left out for want of baseline atlases.
+  const std::vector<std::string>& without_baselines() const { return without_baselines_; }
 
  private:
   const Context& ctx_;
@@ -442,6 +447,7 @@ class Bench {
   std::vector<Method> methods_;
   isochart::PackOptions pack_;
   std::vector<Row> rows_;
+  std::vector<std::string> without_baselines_;
   std::vector<SweepPoint> sweep_;
   std::map<std::string, std::pair<isochart::Mesh, double>> loaded_;  // external atlas, its texture aspect
 };
@@ -858,6 +864,12 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   std::ostringstream doc;
   doc << md << "\nTotal " << fmt(total, 1) << " s; reference resolution " << a.res << "×" << a.res
       << ", PSNR from " << a.psnr_samples << " points per surface, packing ratio at " << a.pack_res << "².\n";
+  // Rows missing without a word read as if the other tools had not been compared there.
+  std::string skipped;
+  for (const auto& m : bench.without_baselines()) skipped += (skipped.empty() ? "" : ", ") + m;
+  if (!skipped.empty())
+    doc << "\nNo `external` rows for " << skipped << ": no baseline atlases in "
+        << (fs::path(a.data) / "baseline_atlases").string() << ".\n";
   for (const auto& p : plots) doc << "\n![" << p << "](" << p << ")\n";
   isochart::write_file_atomic((out / "bench.md").string(), doc.str());
 
@@ -890,6 +902,7 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
                           {"charts", p.charts},
                           {"l2", std::isfinite(p.l2) ? nlohmann::json(p.l2) : nlohmann::json()}});
   j["plots"] = plots;
+  j["without_baselines"] = bench.without_baselines();
   j["out"] = a.out;
   j["seconds"] = total;
   j["seed"] = ctx.opts.seed;
