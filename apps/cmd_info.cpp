@@ -35,6 +35,7 @@ void run_info(const Context& ctx, const InfoArgs& a) {
   j["nonmanifold_vertices"] = rep.nonmanifold_vertices;
   j["degenerate_faces"] = rep.degenerate_faces;
   j["duplicate_faces"] = rep.duplicate_faces;
+  j["double_sided_faces"] = rep.double_sided_faces;
   j["unreferenced_vertices"] = rep.unreferenced_vertices;
   j["polygons_triangulated"] = rep.polygons;
   j["reoriented_faces"] = rep.reoriented_faces;
@@ -77,6 +78,9 @@ void run_info(const Context& ctx, const InfoArgs& a) {
     << "  non-manifold vertices " << rep.nonmanifold_vertices << "\n"
     << "  degenerate faces     " << rep.degenerate_faces << "\n"
     << "  duplicate faces      " << rep.duplicate_faces << "\n"
+    << (rep.double_sided_faces > 0 ? "  double-sided faces   " + std::to_string(rep.double_sided_faces) +
+                                         " (kept as a separate back sheet)\n"
+                                   : std::string())
     << "  unreferenced vertices " << rep.unreferenced_vertices << "\n"
     << "  attributes          " << (m.has_uvs() ? " uv" : "") << (m.has_normals() ? " normals" : "")
     << (m.has_colors() ? " colors" : "") << (m.has_uvs() || m.has_normals() || m.has_colors() ? "" : " none")

@@ -297,7 +297,13 @@ LoadResult load_mesh(const std::string& path, const LoadOptions& options) {
   check_face_limit(path, triangles, options);
   LoadResult r;
   const bool welded = options.weld || fmt == MeshFormat::Gltf || fmt == MeshFormat::Glb;
-  const long long coincident = welded ? 0 : count_coincident(raw);
+  long long coincident = welded ? 0 : count_coincident(raw);
+  if (coincident > 0) {
+    // The two sides of a double-sided sheet, as we write them, lie on each other by design.
+    RawMesh joined = raw, split;
+    io_detail::weld_equal_positions(joined);
+    if (split_double_sided(joined, split) > 0) coincident = count_coincident(split);
+  }
   r.mesh = validate_mesh(raw, options.repair, r.report);
   r.report.coincident_vertices = coincident;
   if (coincident > 0)

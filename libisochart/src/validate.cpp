@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <tuple>
 
 #include "isochart/error.h"
 #include "isochart/union_find.h"
@@ -299,6 +300,156 @@ EdgeGroups group_edges(int num_half_edges, int num_vertices, VertexOf vertex_of)
 
 }  // namespace
 
+// ---- Double-sided sheets -----------------------------------------------------------------
+
+// A double-sided sheet (a card of foliage, a flag) gives every face twice, once reversed, on
+// the same vertices. Read as it is, its inner edges have four faces, and the duplicate test
+// removed one side. Here each edge-connected piece made wholly of such pairs is split into
+// its two sides, the back one on vertices of its own: two coincident open sheets, each
+// unfolded and textured on its own. A piece where only some faces are repeated reversed (a
+// stray copy on a closed surface) is left to the duplicate test. Returns the polygons moved
+// to new vertices (0: `out` untouched).
+int split_double_sided(const RawMesh& raw, RawMesh& out) {
+  const int np = static_cast<int>(raw.polygons.size());
+  const int nv = static_cast<int>(raw.positions.size());
+  // Reversed twins: the same vertices, each polygon the other read backwards, and no third copy.
+  std::vector<std::pair<std::vector<int>, int>> keys;
+  keys.reserve(np);
+  for (int f = 0; f < np; ++f) {
+    std::vector<int> k = raw.polygons[f];
+    std::sort(k.begin(), k.end());
+    if (std::adjacent_find(k.begin(), k.end()) != k.end()) continue;  // repeats a vertex
+    keys.emplace_back(std::move(k), f);
+  }
+  std::sort(keys.begin(), keys.end());
+  auto reversed = [&](int f, int g) {
+    const auto& a = raw.polygons[f];
+    const auto& b = raw.polygons[g];
+    const int n = static_cast<int>(a.size());
+    const int at = static_cast<int>(std::find(b.begin(), b.end(), a[0]) - b.begin());
+    for (int i = 0; i < n; ++i)
+      if (b[((at - i) % n + n) % n] != a[i]) return false;
+    return true;
+  };
+  std::vector<int> twin(np, -1);
+  bool any = false;
+  for (std::size_t i = 0; i + 1 < keys.size(); ++i) {
+    if (keys[i].first != keys[i + 1].first) continue;
+    if (i > 0 && keys[i - 1].first == keys[i].first) continue;
+    if (i + 2 < keys.size() && keys[i + 2].first == keys[i].first) continue;
+    const int f = keys[i].second, g = keys[i + 1].second;
+    if (!reversed(f, g)) continue;
+    twin[f] = g;
+    twin[g] = f;
+    any = true;
+  }
+  if (!any) return 0;
+
+  // Polygon edges grouped by their two vertices; `forward` when the polygon runs low → high.
+  struct Side {
+    int low, high, face;
+    bool forward;
+    bool operator<(const Side& o) const {
+      return std::tie(low, high, face, forward) < std::tie(o.low, o.high, o.face, o.forward);
+    }
+  };
+  std::vector<Side> sides;
+  for (int f = 0; f < np; ++f) {
+    const auto& p = raw.polygons[f];
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const int u = p[i], w = p[(i + 1) % p.size()];
+      sides.push_back({std::min(u, w), std::max(u, w), f, u < w});
+    }
+  }
+  std::sort(sides.begin(), sides.end());
+  std::vector<std::size_t> start = {0};
+  for (std::size_t i = 1; i <= sides.size(); ++i)
+    if (i == sides.size() || sides[i].low != sides[i - 1].low || sides[i].high != sides[i - 1].high)
+      start.push_back(i);
+  std::vector<std::vector<int>> edges_of(np);  // per polygon: its edge groups
+  UnionFind pieces(np);
+  for (std::size_t e = 0; e + 1 < start.size(); ++e)
+    for (std::size_t i = start[e]; i < start[e + 1]; ++i) {
+      edges_of[sides[i].face].push_back(static_cast<int>(e));
+      pieces.unite(sides[i].face, sides[start[e]].face);
+    }
+  std::vector<char> mixed(np, 0);
+  for (int f = 0; f < np; ++f)
+    if (twin[f] < 0) mixed[pieces.find(f)] = 1;
+
+  // Per whole piece, its front: the side reached from its first polygon across edges run the
+  // other way by a polygon that is not the twin (at the rim only the twin shares the edge).
+  std::vector<signed char> sheet(np, 0);  // +1 front, -1 back
+  std::vector<int> queue;
+  for (int s = 0; s < np; ++s) {
+    if (mixed[pieces.find(s)] || sheet[s] != 0) continue;
+    bool ok = true;
+    std::vector<int> seen;
+    sheet[s] = 1;
+    sheet[twin[s]] = -1;
+    queue.assign(1, s);
+    seen = {s, twin[s]};
+    for (std::size_t qi = 0; qi < queue.size() && ok; ++qi) {
+      const int f = queue[qi];
+      for (int e : edges_of[f]) {
+        bool dir = false;
+        for (std::size_t i = start[e]; i < start[e + 1]; ++i)
+          if (sides[i].face == f) dir = sides[i].forward;
+        for (std::size_t i = start[e]; i < start[e + 1]; ++i) {
+          const int g = sides[i].face;
+          if (g == f || g == twin[f] || sides[i].forward == dir) continue;
+          if (sheet[g] == 0) {
+            sheet[g] = sheet[f];
+            sheet[twin[g]] = static_cast<signed char>(-sheet[f]);
+            seen.push_back(g);
+            seen.push_back(twin[g]);
+            queue.push_back(g);
+          } else if (sheet[g] != sheet[f]) {
+            ok = false;  // the sides meet: no two sheets to separate
+          }
+        }
+      }
+    }
+    if (!ok)
+      for (int f : seen) sheet[f] = 0, mixed[pieces.find(f)] = 1;
+  }
+  // Pieces where the walk did not reach every polygon are not two plain sheets either.
+  std::vector<int> reached(np, 0), size(np, 0);
+  for (int f = 0; f < np; ++f) {
+    ++size[pieces.find(f)];
+    reached[pieces.find(f)] += sheet[f] != 0;
+  }
+  int moved = 0;
+  out = raw;
+  std::vector<int> copy_of(nv, -1);
+  std::vector<int> touched;
+  int last_piece = -1;
+  std::vector<int> order(np);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return pieces.find(a) < pieces.find(b); });
+  for (int f : order) {
+    const int r = pieces.find(f);
+    if (sheet[f] >= 0 || mixed[r] || reached[r] != size[r]) continue;
+    if (r != last_piece) {  // each piece's back gets vertices of its own
+      for (int v : touched) copy_of[v] = -1;
+      touched.clear();
+      last_piece = r;
+    }
+    for (int& v : out.polygons[f]) {
+      if (copy_of[v] < 0) {
+        copy_of[v] = static_cast<int>(out.positions.size());
+        touched.push_back(v);
+        out.positions.push_back(raw.positions[v]);
+        if (!raw.normals.empty()) out.normals.push_back(raw.normals[v]);
+        if (!raw.colors.empty()) out.colors.push_back(raw.colors[v]);
+      }
+      v = copy_of[v];
+    }
+    ++moved;
+  }
+  return moved;
+}
+
 RawMesh to_raw_mesh(const Mesh& mesh, const std::string& source) {
   RawMesh raw;
   raw.source = source;
@@ -407,6 +558,19 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
         if (t < 0 || t >= static_cast<int>(raw.uvs.size()))
           fail("face " + std::to_string(f) + " refers to texture coordinate " + std::to_string(t) +
                ", but there are only " + std::to_string(raw.uvs.size()));
+    }
+  }
+  if (repair) {
+    RawMesh split;
+    if (const int moved = split_double_sided(raw, split)) {
+      Mesh m = validate_mesh(split, repair, report);
+      report.input_vertices = nv;
+      report.double_sided_faces = moved;
+      report.warnings.push_back("gave the back side of " + std::to_string(moved) +
+                                (moved == 1 ? " face" : " faces") +
+                                " repeated in reverse (a double-sided sheet) vertices of its own, so both "
+                                "sides are kept as separate sheets");
+      return m;
     }
   }
 

@@ -298,6 +298,25 @@ TEST_CASE("a triangle soup is named, and --weld joins it", "[cli]") {
   CHECK(read_bytes(err).empty());
 }
 
+TEST_CASE("a double-sided card keeps its back, and its atlas reads back without a soup warning", "[cli]") {
+  TempDir tmp("card");
+  const fs::path card = tmp.path / "card.obj", atlas = tmp.path / "atlas.obj", out = tmp.path / "r.json",
+                 err = tmp.path / "err.txt";
+  std::ofstream(card) << "v 0 0 0\nv 1 0 0\nv 1 1 0.2\nv 0 1 0\nf 1 2 3\nf 1 3 4\nf 3 2 1\nf 4 3 1\n";
+  REQUIRE(run_cli("info '" + card.string() + "' --report '" + out.string() + "'", err) == 0);
+  nlohmann::json j = nlohmann::json::parse(read_bytes(out));
+  CHECK(j["double_sided_faces"] == 2);
+  CHECK(j["duplicate_faces"] == 0);
+  CHECK(j["components"] == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("card.obj: gave the back side of 2 faces repeated in reverse"));
+  REQUIRE(run_cli("atlas '" + card.string() + "' -o '" + atlas.string() + "' --report '" + out.string() + "'",
+                  err) == 0);
+  // Written out, the two sides are coincident vertices by design, not a triangle soup.
+  REQUIRE(run_cli("stats '" + atlas.string() + "' --report '" + out.string() + "'", err) == 0);
+  CHECK(nlohmann::json::parse(read_bytes(out))["charts"] == 2);
+  CHECK(read_bytes(err).find("without being joined") == std::string::npos);
+}
+
 TEST_CASE("the report is written atomically next to a good input", "[cli]") {
   TempDir tmp("report");
   const fs::path input = tmp.path / "tetra.obj", out = tmp.path / "report.json", err = tmp.path / "err.txt";

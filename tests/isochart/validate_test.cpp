@@ -272,6 +272,56 @@ TEST_CASE("duplicate faces are removed whatever their corner order", "[validate]
   CHECK_THAT(error_of(r, false), Catch::Contains("face 4 has the same vertices as face 0"));
 }
 
+TEST_CASE("a double-sided sheet keeps both sides, each a sheet of its own", "[validate]") {
+  // Every face again, reversed, on the same vertices: the duplicate test removed the back.
+  const std::vector<Vec3d> p = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0.2}, {0, 1, 0}, {2, 0, 0}, {2, 1, 0.1}};
+  for (const bool quads : {false, true}) {
+    INFO((quads ? "quads" : "triangles"));
+    std::vector<std::vector<int>> front =
+        quads ? std::vector<std::vector<int>>{{0, 1, 2, 3}, {1, 4, 5, 2}}
+              : std::vector<std::vector<int>>{{0, 1, 2}, {0, 2, 3}, {1, 4, 5}, {1, 5, 2}};
+    std::vector<std::vector<int>> polys = front;
+    for (auto f : front) {
+      std::reverse(f.begin(), f.end());
+      polys.push_back(f);
+    }
+    RawMesh r = raw_of(p, polys);
+    r.normals = p;
+    ValidationReport rep;
+    const Mesh m = validate(r, rep);
+    CHECK(rep.double_sided_faces == static_cast<int>(front.size()));
+    CHECK(rep.duplicate_faces == 0);
+    CHECK(rep.input_vertices == 6);
+    CHECK(m.num_faces() == 8);
+    CHECK(m.num_vertices() == 12);  // the back's own copies, at the same places
+    CHECK(rep.components == 2);
+    check_clean(m);
+    const Topology t(m);
+    int boundary = 0;
+    for (int e = 0; e < t.num_edges(); ++e) boundary += t.is_boundary_edge(e);
+    CHECK(boundary == 12);  // each side keeps its rim of 6 edges
+    // The two sides face away from each other.
+    auto normal = [&](int f) {
+      const Face& x = m.faces[f];
+      return cross(m.positions[x[1]] - m.positions[x[0]], m.positions[x[2]] - m.positions[x[0]]);
+    };
+    int up = 0, down = 0;
+    for (int f = 0; f < m.num_faces(); ++f) (normal(f).z > 0 ? up : down)++;
+    CHECK(up == 4);
+    CHECK(down == 4);
+    bool warned = false;
+    for (const auto& w : rep.warnings) warned |= w.find("double-sided sheet") != std::string::npos;
+    CHECK(warned);
+  }
+  // A reversed copy of one face of a closed surface is junk, not a second side.
+  RawMesh t = tetrahedron();
+  t.polygons.push_back({2, 1, 0});
+  ValidationReport rep;
+  CHECK(validate(t, rep).num_faces() == 4);
+  CHECK(rep.double_sided_faces == 0);
+  CHECK(rep.duplicate_faces == 1);
+}
+
 TEST_CASE("unreferenced vertices are dropped and attributes remapped", "[validate]") {
   RawMesh r = raw_of({{9, 9, 9}, {0, 0, 0}, {8, 8, 8}, {1, 0, 0}, {0, 1, 0}}, {{1, 3, 4}});
   r.normals = {{1, 0, 0}, {0, 0, 1}, {0, 1, 0}, {0, 0, 1}, {0, 0, 1}};

@@ -26,6 +26,11 @@ struct RawMesh {
 /// through the same validation as files.
 RawMesh to_raw_mesh(const Mesh& mesh, const std::string& source);
 
+/// Splits each edge-connected piece made wholly of polygons and their reversed copies (a
+/// double-sided sheet) into its two sides, the back one on vertices of its own, into `out`.
+/// Returns the polygons moved (0: none, `out` untouched). validate_mesh does this when repairing.
+int split_double_sided(const RawMesh& raw, RawMesh& out);
+
 /// What validation found in the input and what it changed.
 struct ValidationReport {
   int input_vertices = 0;             ///< vertices in the file
@@ -33,6 +38,9 @@ struct ValidationReport {
   int polygons = 0;                   ///< faces with more than 3 corners (triangulated)
   int degenerate_faces = 0;           ///< zero-area faces or faces repeating a vertex (removed)
   int duplicate_faces = 0;            ///< faces with the same vertex set as an earlier one (removed)
+  /// Input faces given vertices of their own as the back of a double-sided sheet (a piece
+  /// made wholly of faces and their reversed copies): both sides kept, as separate sheets.
+  int double_sided_faces = 0;
   int unreferenced_vertices = 0;      ///< vertices used by no face (dropped)
   int nonmanifold_edges = 0;          ///< edges with more than two faces (split)
   int nonmanifold_vertices = 0;       ///< vertices joining several fans (split)

@@ -145,7 +145,8 @@ std::vector<Level> build_pyramid(const isochart::Mesh& atlas, const PyramidOptio
 /// Result of the resolution search for a sample budget.
 struct ResolutionChoice {
   int width = 0, height = 0;
-  long long defined_samples = 0;  ///< samples covered at that resolution (before disk cleanup)
+  long long defined_samples =
+      0;  ///< choose_resolution: covered before disk cleanup; match_resolution: the built level's
   int trials = 0;
   bool capped = false;  ///< the budget needs a side beyond max_side; this is max_side
 };
