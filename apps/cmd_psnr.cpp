@@ -88,7 +88,7 @@ void add_psnr(CLI::App& app, Context& ctx, Action& action) {
   sub->footer(
       "PSNR = 20 log10(diagonal / d), d the larger of the two one-sided RMS distances (the mean "
       "of the two gives the second figure); distances are exact point-to-triangle. Identical surfaces "
-      "(d = 0) give inf, null in JSON.\n"
+      "(d below 1e-14 of the diagonal, which is rounding) give inf, null in JSON.\n"
       "Example: isocharts psnr ../shared/data/meshes/horse.ply horse_remesh.ply --json");
   sub->callback([&ctx, args, &action] { action = [&ctx, args] { run_psnr(ctx, *args); }; });
 }

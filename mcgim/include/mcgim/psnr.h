@@ -43,7 +43,7 @@ DistanceResult measure_distance(const isochart::Mesh& a, const isochart::Mesh& b
                                 const DistanceOptions& options = {},
                                 const isochart::Progress& progress = {});
 
-/// 20·log10(peak / d), +inf for d = 0.
+/// 20·log10(peak / d); +inf for d ≤ 1e-14·peak (rounding: the surfaces are the same).
 double psnr_db(double peak, double d);
 
 }  // namespace mcgim
