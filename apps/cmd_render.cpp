@@ -21,6 +21,7 @@ struct RenderArgs {
   std::string output;
   std::string texture;
   bool charts = false;
+  bool shaded = false;  // ignore the mesh's own texture
   bool wireframe = false;
   bool uv_layout = false;
   bool ortho = false;
@@ -48,7 +49,9 @@ isochart::Vec3d up_axis(const std::string& name) {
 void run_render(const Context& ctx, const RenderArgs& a) {
   up_axis(a.up);  // reject a bad axis before loading anything
   const auto t0 = std::chrono::steady_clock::now();
-  if (a.charts && !a.texture.empty()) bad_option("--charts and --texture are exclusive");
+  if (int(a.charts) + int(a.shaded) + int(!a.texture.empty()) > 1)
+    bad_option("--charts, --shaded and --texture are exclusive");
+  if (a.uv_layout && a.shaded) bad_option("--uv-layout draws the atlas itself; it takes no --shaded");
   ctx.check_paths({a.input, a.texture}, {a.output});
   ctx.check_image_outputs({a.output});
   if (a.uv_layout && (!a.texture.empty() || a.wireframe || a.ortho || a.transparent))
@@ -121,7 +124,9 @@ void run_render(const Context& ctx, const RenderArgs& a) {
     }
     image = for_input([&] { return isochart::render_uv_layout(mesh, width, height, aspect); });
     mode = "uv-layout";
-  } else {
+  }
+  std::string own;  // the mesh's own texture drawn: its file, or "embedded"
+  if (!a.uv_layout) {
     isochart::RenderOptions o;
     o.views = a.views;
     o.width = width;
@@ -132,10 +137,39 @@ void run_render(const Context& ctx, const RenderArgs& a) {
     o.supersample = a.supersample;
     o.up = up_axis(a.up);
     isochart::Image texture;
-    if (!a.texture.empty()) {
+    if (a.texture.empty() && !a.charts && !a.shaded && mesh.has_uvs()) {
+      // What synth and atlas outputs carry (an OBJ's MTL map_Kd, a glb's base colour) was
+      // drawn untextured unless named again with --texture.
+      const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
+      try {
+        if (!t.file.empty()) {
+          texture = isochart::read_image(t.file);
+          own = t.file;
+        } else if (!t.bytes.empty()) {
+          const std::string tmp = isochart::temporary_path(a.output, t.extension);
+          isochart::track_temporary_file(tmp);
+          try {
+            // The image library reads files; outputs are only renamed into place at the end.
+            std::ofstream(tmp, std::ios::binary)
+                .write(t.bytes.data(), static_cast<std::streamsize>(t.bytes.size()));
+            texture = isochart::read_image(tmp);
+          } catch (...) {
+            isochart::remove_temporary_file(tmp);
+            throw;
+          }
+          isochart::remove_temporary_file(tmp);
+          own = "embedded";
+        }
+      } catch (const isochart::InputError& e) {
+        ctx.warn(a.input, std::string("its texture cannot be read (") + e.what() + "); drawn shaded");
+        texture = isochart::Image{};
+        own.clear();
+      }
+    }
+    if (!a.texture.empty() || !own.empty()) {
       if (!mesh.has_uvs())
         throw isochart::InputError(a.input, "mesh has no texture coordinates; --texture needs them");
-      texture = isochart::read_image(a.texture);
+      if (own.empty()) texture = isochart::read_image(a.texture);
       o.texture = &texture;
       o.color = isochart::ColorMode::Textured;
       mode = "textured";
@@ -153,6 +187,7 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   j["file"] = a.input;
   j["output"] = a.output;
   j["mode"] = mode;
+  if (mode == "textured") j["texture"] = own.empty() ? a.texture : own;
   j["views"] = a.uv_layout ? 0 : a.views;
   if (!a.uv_layout) j["up"] = a.up;
   j["width"] = image.width;
@@ -172,6 +207,9 @@ void add_render(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("-o,--output", args->output, "Output image (.png, .jpg, .exr, ...)")->required();
   sub->add_option("--texture", args->texture, "Texture image mapped through the mesh's UVs");
   sub->add_flag("--charts", args->charts, "Colour each chart (face groups, else UV charts)");
+  sub->add_flag("--shaded", args->shaded,
+                "Draw shaded without the mesh's own texture (by default an OBJ's MTL map_Kd or a glb's "
+                "base-colour image is drawn)");
   sub->add_flag("--wireframe", args->wireframe, "Draw the triangle edges");
   sub->add_flag("--uv-layout", args->uv_layout, "Draw the atlas in texture space instead of 3D views");
   sub->add_option("--aspect", args->aspect,

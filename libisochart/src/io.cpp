@@ -257,6 +257,13 @@ RawMesh read_raw_mesh(const std::string& path, const LoadOptions& options) {
   throw Error("unhandled mesh format");
 }
 
+MeshTexture find_mesh_texture(const std::string& path) {
+  const MeshFormat fmt = format_from_path(path);
+  if (fmt != MeshFormat::Obj && fmt != MeshFormat::Gltf && fmt != MeshFormat::Glb) return {};
+  const std::string data = read_file(path);
+  return fmt == MeshFormat::Obj ? obj_texture(path, data) : gltf_texture(path, data, fmt == MeshFormat::Glb);
+}
+
 namespace {
 
 // Used vertices at the bit-identical position of an earlier used vertex (−0 equal to +0).

@@ -756,4 +756,53 @@ std::string glb_bytes(const Mesh& m, const std::string& texture) {
   return os.str();
 }
 
+namespace {
+
+// Keeps each image's encoded bytes instead of decoding them.
+bool keep_image_bytes(tinygltf::Image*, const int index, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void* user) {
+  auto& kept = *static_cast<std::map<int, std::string>*>(user);
+  kept[index].assign(reinterpret_cast<const char*>(bytes), static_cast<std::size_t>(std::max(size, 0)));
+  return true;
+}
+
+}  // namespace
+
+MeshTexture gltf_texture(const std::string& path, std::string_view data, bool binary) {
+  if (data.size() > 0xffffffffu) return {};
+  std::map<int, std::string> images;
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(keep_image_bytes, &images);
+  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_buffer_file,
+                         &tinygltf::WriteWholeFile, nullptr});
+  tinygltf::Model model;
+  std::string err, warn;
+  const auto slash = path.find_last_of('/');
+  const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
+  bool ok = false;
+  try {
+    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn,
+                                              reinterpret_cast<const unsigned char*>(data.data()),
+                                              static_cast<unsigned int>(data.size()), base_dir)
+                : loader.LoadASCIIFromString(&model, &err, &warn, data.data(),
+                                             static_cast<unsigned int>(data.size()), base_dir);
+  } catch (const std::exception&) {
+    ok = false;
+  }
+  if (!ok || model.materials.empty()) return {};
+  const int tex = model.materials[0].pbrMetallicRoughness.baseColorTexture.index;
+  if (tex < 0 || tex >= static_cast<int>(model.textures.size())) return {};
+  const int source = model.textures[tex].source;
+  const auto found = images.find(source);
+  if (found == images.end() || found->second.empty()) return {};
+  MeshTexture t;
+  t.bytes = std::move(found->second);
+  const bool png = t.bytes.size() >= 4 && t.bytes.compare(0, 4, "\x89PNG") == 0;
+  const bool jpeg = t.bytes.size() >= 2 && static_cast<unsigned char>(t.bytes[0]) == 0xFF &&
+                    static_cast<unsigned char>(t.bytes[1]) == 0xD8;
+  if (!png && !jpeg) return {};  // glTF allows only PNG and JPEG (extensions aside)
+  t.extension = png ? ".png" : ".jpg";
+  return t;
+}
+
 }  // namespace isochart::io_detail

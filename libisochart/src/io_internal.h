@@ -18,6 +18,9 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
 RawMesh read_off(const std::string& path, std::string_view data, const LoadOptions& options);
 RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptions& options);
 RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, const LoadOptions& options);
+/// find_mesh_texture for each format (`data` is the whole mesh file).
+MeshTexture obj_texture(const std::string& path, std::string_view data);
+MeshTexture gltf_texture(const std::string& path, std::string_view data, bool binary);
 /// Joins vertices at bit-identical positions (glTF splits them at attribute seams).
 void weld_equal_positions(RawMesh& raw);
 

@@ -352,4 +352,76 @@ std::string obj_text(const Mesh& m, const std::string& mtl_file, bool write_grou
   return out;
 }
 
+namespace {
+
+std::string_view trim(std::string_view v) {
+  while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
+  while (!v.empty() && (v.back() == ' ' || v.back() == '\t' || v.back() == '\r')) v.remove_suffix(1);
+  return v;
+}
+
+// The rest of `line` after `keyword` and white space, or nullopt when it is another line.
+bool after_keyword(std::string_view line, std::string_view keyword, std::string_view& rest) {
+  line = trim(line);
+  if (line.size() <= keyword.size() || line.substr(0, keyword.size()) != keyword) return false;
+  if (line[keyword.size()] != ' ' && line[keyword.size()] != '\t') return false;
+  rest = trim(line.substr(keyword.size()));
+  return !rest.empty();
+}
+
+std::string directory_of(const std::string& path) {
+  const auto slash = path.find_last_of('/');
+  return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
+}
+
+}  // namespace
+
+MeshTexture obj_texture(const std::string& path, std::string_view data) {
+  std::vector<std::string> libraries;
+  std::string material;
+  for (std::size_t at = 0; at < data.size();) {
+    std::size_t end = data.find('\n', at);
+    if (end == std::string_view::npos) end = data.size();
+    const std::string_view line = data.substr(at, end - at);
+    at = end + 1;
+    std::string_view rest;
+    if (after_keyword(line, "mtllib", rest)) {
+      libraries.emplace_back(rest);
+    } else if (material.empty() && after_keyword(line, "usemtl", rest)) {
+      material = std::string(rest);
+      if (!libraries.empty()) break;  // both known: the rest is geometry
+    }
+  }
+  for (const std::string& lib : libraries) {
+    const std::string mtl_path = lib.front() == '/' ? lib : directory_of(path) + lib;
+    std::string mtl;
+    try {
+      mtl = read_file(mtl_path);
+    } catch (const InputError&) {
+      continue;  // a missing MTL only loses the material, as in every viewer
+    }
+    bool in_material = false, seen_material = false;
+    for (std::size_t at = 0; at < mtl.size();) {
+      std::size_t end = mtl.find('\n', at);
+      if (end == std::string::npos) end = mtl.size();
+      const std::string_view line = std::string_view(mtl).substr(at, end - at);
+      at = end + 1;
+      std::string_view rest;
+      if (after_keyword(line, "newmtl", rest)) {
+        if (seen_material && in_material) break;
+        in_material = material.empty() ? !seen_material : rest == material;
+        seen_material = true;
+      } else if (in_material && after_keyword(line, "map_Kd", rest)) {
+        // Options (-s 1 1 1, -clamp on, ...) come first; the file name is last.
+        const std::size_t space = rest.find_last_of(" \t");
+        const std::string name(space == std::string_view::npos ? rest : rest.substr(space + 1));
+        MeshTexture t;
+        t.file = name.front() == '/' ? name : directory_of(mtl_path) + name;
+        return t;
+      }
+    }
+  }
+  return {};
+}
+
 }  // namespace isochart::io_detail

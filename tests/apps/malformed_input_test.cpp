@@ -411,6 +411,42 @@ TEST_CASE("an output over an input of the run, or two outputs on one path, are r
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt", "s.obj"});
 }
 
+TEST_CASE("render draws the texture a mesh file carries or names, unless --shaded", "[cli]") {
+  // synth's outputs were drawn untextured unless their texture was named again.
+  TempDir tmp("own_texture");
+  const fs::path err = tmp.path / "err.txt", out = tmp.path / "r.json";
+  REQUIRE(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() +
+                      "' --levels 32 --atlas-size 64",
+                  err) == 0);
+  auto render = [&](const std::string& mesh, const std::string& extra, const std::string& png) {
+    REQUIRE(run_cli("render '" + (tmp.path / mesh).string() + "' -o '" + (tmp.path / png).string() +
+                        "' --views 1 --report '" + out.string() + "'" + extra,
+                    err) == 0);
+    return nlohmann::json::parse(read_bytes(out));
+  };
+  nlohmann::json j = render("s.obj", "", "obj.png");
+  CHECK(j["mode"] == "textured");
+  CHECK(j["texture"] == (tmp.path / "s.png").string());  // map_Kd, beside the MTL
+  j = render("s.obj", " --texture '" + (tmp.path / "s.png").string() + "'", "given.png");
+  CHECK(read_bytes(tmp.path / "obj.png") == read_bytes(tmp.path / "given.png"));
+  j = render("s.glb", "", "glb.png");
+  CHECK(j["mode"] == "textured");
+  CHECK(j["texture"] == "embedded");
+  j = render("s.obj", " --shaded", "plain.png");
+  CHECK(j["mode"] == "shaded");
+  CHECK(read_bytes(tmp.path / "plain.png") != read_bytes(tmp.path / "obj.png"));
+  // The decoded copy of the embedded image is gone; a texture named but missing is a warning.
+  for (const auto& e : fs::directory_iterator(tmp.path))
+    CHECK(e.path().filename().string().find(".tmp-") == std::string::npos);
+  fs::remove(tmp.path / "s.png");
+  j = render("s.obj", "", "missing.png");
+  CHECK(j["mode"] == "shaded");
+  CHECK_THAT(read_bytes(err), Catch::Contains("s.obj: its texture cannot be read"));
+  CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "x.png").string() + "' --shaded --charts", err) ==
+        2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("--charts, --shaded and --texture are exclusive"));
+}
+
 TEST_CASE("a corrupt texture is one line: the image library's own message is not printed", "[cli]") {
   TempDir tmp("corrupt_png");
   const fs::path err = tmp.path / "err.txt", mesh = tmp.path / "s.obj", png = tmp.path / "t.png";

@@ -53,6 +53,19 @@ struct LoadResult {
 ///        "face 3") for binary ones, empty, NaN/Inf, index out of range, too large, ...).
 LoadResult load_mesh(const std::string& path, const LoadOptions& options = {});
 
+/// The colour texture a mesh file names or carries, for drawing it: an OBJ's material's
+/// `map_Kd` (the material of its first `usemtl`, else the MTL's first; the path relative to
+/// the MTL), or a glTF/glb's first material's base-colour image (its encoded bytes, or the
+/// file it refers to). All empty when there is none.
+struct MeshTexture {
+  std::string file;       ///< an image file, or empty
+  std::string bytes;      ///< an embedded image's encoded bytes, or empty
+  std::string extension;  ///< ".png" or ".jpg" for `bytes`
+};
+/// \throw InputError when the mesh file itself cannot be read; a texture named but missing is
+///        returned by name (reading it then fails).
+MeshTexture find_mesh_texture(const std::string& path);
+
 /// Reads a file into a raw polygon soup without validation (what the file says: glTF
 /// vertices split at UV and normal seams stay split; load_mesh joins those at equal positions).
 /// \throw InputError as load_mesh for file-level problems.
