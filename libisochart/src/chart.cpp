@@ -480,7 +480,10 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
   opt.vertex_l2_threshold = o.max_l2;
   opt.give_up_l2 = o.max_l2;
   opt.cancel = o.cancel;
-  if (o.face_metric) opt.face_metric = chart_metric(g, *o.face_metric);
+  if (o.face_metric) {
+    opt.face_metric = chart_metric(g, *o.face_metric);
+    opt.boundary_clearance = kSignalBoundaryClearance;  // see reoptimize in signal_atlas.cpp
+  }
   double seconds = 0;
   // Every start of this chart is untangled, optimized and (for LSCM) pinned on one topology.
   const Topology own = o.topology ? Topology() : Topology(g.tris, g.num_vertices());

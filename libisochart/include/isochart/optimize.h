@@ -43,10 +43,19 @@ struct OptimizeOptions {
   /// y towards corner 2). The L2 term becomes Σ A·tr(Jᵀ G J)/2 normalized by the metric area
   /// Σ A·sqrt(det G); the Linf term stays geometric so no triangle degenerates. Empty: G = I.
   std::vector<std::array<double, 3>> face_metric;
+  /// Least UV distance kept between parts of a chart's boundary that are not neighbours, as a
+  /// fraction of its mean boundary edge length: a move into that margin is refused unless it
+  /// widens the gap. 0: the boundary only has to stay simple. A boundary closing in on itself
+  /// keeps the chart one-to-one but bakes far-apart surface points into the same texels.
+  double boundary_clearance = 0;
   /// When set and it turns true, the optimization stops at the next vertex (the caller no
   /// longer wants the result: a merge attempt computed ahead and then abandoned).
   const std::atomic<bool>* cancel = nullptr;
 };
+
+/// OptimizeOptions::boundary_clearance of signal-specialized charts (their parameterization
+/// and re-optimization).
+inline constexpr double kSignalBoundaryClearance = 0.5;
 
 struct OptimizeResult {
   StretchStats before, after;
