@@ -576,25 +576,33 @@ bool read_buffer_file(std::vector<unsigned char>* out, std::string* err, const s
     return false;
   }
 }
+
+// Parses the glTF/glb held in `data` (its external buffers and images relative to `path`)
+// with `loader`, whose image loader the caller has set. Exceptions of tinygltf pass through.
+bool parse_gltf(tinygltf::TinyGLTF& loader, const std::string& path, std::string_view data, bool binary,
+                tinygltf::Model& model, std::string& err) {
+  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_buffer_file,
+                         &tinygltf::WriteWholeFile, nullptr});
+  std::string warn;
+  const auto slash = path.find_last_of('/');
+  const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
+  return binary ? loader.LoadBinaryFromMemory(&model, &err, &warn,
+                                              reinterpret_cast<const unsigned char*>(data.data()),
+                                              static_cast<unsigned int>(data.size()), base_dir)
+                : loader.LoadASCIIFromString(&model, &err, &warn, data.data(),
+                                             static_cast<unsigned int>(data.size()), base_dir);
+}
 }  // namespace
 
 RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, const LoadOptions& options) {
   if (data.size() > 0xffffffffu) throw InputError(path, "glTF file is larger than 4 GiB");
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(skip_image, nullptr);
-  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_buffer_file,
-                         &tinygltf::WriteWholeFile, nullptr});
   tinygltf::Model model;
-  std::string err, warn;
-  const auto slash = path.find_last_of('/');
-  const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
+  std::string err;
   bool ok = false;
   try {
-    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn,
-                                              reinterpret_cast<const unsigned char*>(data.data()),
-                                              static_cast<unsigned int>(data.size()), base_dir)
-                : loader.LoadASCIIFromString(&model, &err, &warn, data.data(),
-                                             static_cast<unsigned int>(data.size()), base_dir);
+    ok = parse_gltf(loader, path, data, binary, model, err);
   } catch (const std::exception& e) {
     throw InputError(path, std::string("invalid glTF: ") + first_line(e.what()));
   }
@@ -773,19 +781,11 @@ MeshTexture gltf_texture(const std::string& path, std::string_view data, bool bi
   std::map<int, std::string> images;
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keep_image_bytes, &images);
-  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_buffer_file,
-                         &tinygltf::WriteWholeFile, nullptr});
   tinygltf::Model model;
-  std::string err, warn;
-  const auto slash = path.find_last_of('/');
-  const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
+  std::string err;
   bool ok = false;
   try {
-    ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn,
-                                              reinterpret_cast<const unsigned char*>(data.data()),
-                                              static_cast<unsigned int>(data.size()), base_dir)
-                : loader.LoadASCIIFromString(&model, &err, &warn, data.data(),
-                                             static_cast<unsigned int>(data.size()), base_dir);
+    ok = parse_gltf(loader, path, data, binary, model, err);
   } catch (const std::exception&) {
     ok = false;
   }
