@@ -249,6 +249,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
                    {"signal_rms", sae.signal_rms}};
     j["sae"] = sae.sae;
     if (!a.imt_out.empty()) j["imt"] = a.imt_out;
+    if (!a.signal_texture_out.empty()) j["signal_texture"] = a.signal_texture_out;
   }
   nlohmann::json secs = s.seconds;
   if (!a.signal.empty()) secs["sae"] = sae.seconds;

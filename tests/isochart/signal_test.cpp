@@ -517,13 +517,14 @@ TEST_CASE("isocharts sae reports the field sae", "[signal]") {
     CHECK(report.find("\"sae_height\": 23") != std::string::npos);
     // Without --sae-res it is the texture the atlas was packed for: at 256² a 1024² atlas's
     // chart borders weighed four times more and reversed rankings against geometric atlases.
-    const std::string d = "\"" + std::string(ISOCHARTS_CLI) +
-                          "\" -q --json atlas builtin:face --signal normals -o " + dir +
-                          "/wd.obj --width 512 --height 64 > " + dir + "/wd.json";
+    const std::string d =
+        "\"" + std::string(ISOCHARTS_CLI) + "\" -q --json atlas builtin:face --signal normals -o " + dir +
+        "/wd.obj --width 512 --height 64 --signal-texture-out " + dir + "/wd.png > " + dir + "/wd.json";
     REQUIRE(std::system(d.c_str()) == 0);
     const std::string packed = read_text(dir + "/wd.json");
     CHECK(packed.find("\"sae_width\": 512") != std::string::npos);
     CHECK(packed.find("\"sae_height\": 64") != std::string::npos);
+    CHECK(packed.find("\"signal_texture\": \"" + dir + "/wd.png\"") != std::string::npos);  // was not named
   }
   auto [lone_rc, lone_err] = stderr_of("--width 512");
   CHECK(lone_rc == 2);
