@@ -562,6 +562,9 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
     const LocalGrid whole = g;
     long long bridged = 0, cleaned = 0, cut_off = 0;
     remove_bridges(g, a.charts[c], pl.texel[c], bridged);
+    for (int v = 0; v < g.w * g.h; ++v)
+      if (whole.in[v] && !g.in[v]) r.bridges.push_back(to_image(v));
+    std::sort(r.bridges.begin(), r.bridges.end());
     std::vector<int> ring = make_disk(g, cleaned, &cut_off);
     const long long total = std::count(whole.in.begin(), whole.in.end(), 1);
     if (cleaned > std::max(16LL, total / 50)) {
@@ -572,6 +575,7 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
         g = std::move(alt);
         ring = std::move(alt_ring);
         bridged = 0;
+        r.bridges.clear();
         cleaned = alt_cleaned;
         cut_off = alt_cut_off;
       }
@@ -703,14 +707,18 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
   // A part of a chart joined to the rest by a neck thinner than a sample was cut off above and
   // would be contracted with all its surface. Such charts are tried again with the free texels
   // they touch added, which carries the neck across; the result is kept when it holds more.
+  // The samples taken off as bridges across notches stay off: put back, their block triangles
+  // would span the notch, and across a crack deeper than a texel they join surface points far
+  // apart (gargoyle, new atlas at 256²: a tear of 13-36-unit edges, 54.5 dB instead of 77.9).
   for (int c = 0; c < nc; ++c) {
     ChartRegion& r = s.regions[c];
     if (r.ring.empty() || r.cut_off < 16) continue;
+    auto bridge = [&](int i) { return std::binary_search(r.bridges.begin(), r.bridges.end(), i); };
     std::vector<int> set = r.samples;
     for (const Hit& h : hits[c])
-      if (free_for(c, h.sample % W, h.sample / W)) set.push_back(h.sample);
+      if (!bridge(h.sample) && free_for(c, h.sample % W, h.sample / W)) set.push_back(h.sample);
     for (int t : touched_texels(c))
-      if (free_for(c, t % W, t / W)) set.push_back(t);
+      if (!bridge(t) && free_for(c, t % W, t / W)) set.push_back(t);
     std::sort(set.begin(), set.end());
     set.erase(std::unique(set.begin(), set.end()), set.end());
     LocalGrid g = grid_around(set, W);

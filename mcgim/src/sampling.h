@@ -18,6 +18,7 @@ struct ChartRegion {
   std::vector<int> ring;
   long long removed = 0;     // covered samples dropped by the cleanup
   long long cut_off = 0;     // of those, samples of parts cut off from the rest (thin necks)
+  std::vector<int> bridges;  // covered samples dropped as bridges across notches, ascending
 };
 
 struct Sampling {
