@@ -26,6 +26,12 @@ using isochart::InputError;
 constexpr double kFixed = 4096.0;
 constexpr std::int64_t kHalf = 2048;
 
+// A bridge sample with a grid neighbour farther on the surface than this many times the
+// chart's mean surface length per texel spans a crack (see the neck retry in sample_charts).
+// Measured on the bridges of gargoyle and armadillo: 0.95-2.1 across shallow notches,
+// 2.7-25 across cracks.
+constexpr double kTornBridge = 2.5;
+
 struct FixedPoint {
   std::int64_t x, y;
 };
@@ -707,18 +713,56 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
   // A part of a chart joined to the rest by a neck thinner than a sample was cut off above and
   // would be contracted with all its surface. Such charts are tried again with the free texels
   // they touch added, which carries the neck across; the result is kept when it holds more.
-  // The samples taken off as bridges across notches stay off: put back, their block triangles
-  // would span the notch, and across a crack deeper than a texel they join surface points far
-  // apart (gargoyle, new atlas at 256²: a tear of 13-36-unit edges, 54.5 dB instead of 77.9).
+  // A sample taken off as a bridge across a notch comes back only when no grid neighbour lies
+  // far from it on the surface: across a crack deeper than a texel the block triangles would
+  // join surface points far apart (gargoyle, a 13-chart atlas at 256²: a tear of 13-36-unit
+  // edges, 54.5 dB instead of 74), while across a shallow notch they follow the surface and
+  // keep its samples (armadillo at 64²: 0.65 dB).
   for (int c = 0; c < nc; ++c) {
     ChartRegion& r = s.regions[c];
     if (r.ring.empty() || r.cut_off < 16) continue;
-    auto bridge = [&](int i) { return std::binary_search(r.bridges.begin(), r.bridges.end(), i); };
+    const Chart& chart = a.charts[c];
+    double area3 = 0, area2 = 0;
+    for (std::size_t lf = 0; lf < chart.local_faces.size(); ++lf) {
+      const Face& f = m.faces[chart.faces[lf]];
+      const Face& l = chart.local_faces[lf];
+      area3 +=
+          0.5 * norm(cross(m.positions[f[1]] - m.positions[f[0]], m.positions[f[2]] - m.positions[f[0]]));
+      area2 +=
+          0.5 * std::abs(cross(pl.texel[c][l[1]] - pl.texel[c][l[0]], pl.texel[c][l[2]] - pl.texel[c][l[0]]));
+    }
+    // Surface length of one texel in this chart.
+    const double texel3 = area2 > 0 ? std::sqrt(area3 / area2) : 0.0;
+    auto hit_at = [&](int i) -> const Hit* {
+      const auto h = std::lower_bound(hits[c].begin(), hits[c].end(), i,
+                                      [](const Hit& x, int v) { return x.sample < v; });
+      return h != hits[c].end() && h->sample == i ? &*h : nullptr;
+    };
+    auto hit_point = [&](const Hit& h) { return face_point(m, chart.faces[h.local_face], h.bary); };
+    std::vector<int> torn;
+    for (int b : r.bridges) {
+      const Hit* hb = hit_at(b);
+      if (!hb) continue;
+      const Vec3d pb = hit_point(*hb);
+      const int bx = b % W, by = b / W;
+      double worst = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int x = bx + dx, y = by + dy;
+          if ((dx == 0 && dy == 0) || x < 0 || y < 0 || x >= W || y >= H) continue;
+          const Hit* hn = hit_at(im.index(x, y));
+          if (!hn) continue;
+          worst =
+              std::max(worst, norm(hit_point(*hn) - pb) / (texel3 * std::sqrt(double(dx * dx + dy * dy))));
+        }
+      if (worst > kTornBridge) torn.push_back(b);
+    }
+    auto torn_bridge = [&](int i) { return std::binary_search(torn.begin(), torn.end(), i); };
     std::vector<int> set = r.samples;
     for (const Hit& h : hits[c])
-      if (!bridge(h.sample) && free_for(c, h.sample % W, h.sample / W)) set.push_back(h.sample);
+      if (!torn_bridge(h.sample) && free_for(c, h.sample % W, h.sample / W)) set.push_back(h.sample);
     for (int t : touched_texels(c))
-      if (!bridge(t) && free_for(c, t % W, t / W)) set.push_back(t);
+      if (!torn_bridge(t) && free_for(c, t % W, t / W)) set.push_back(t);
     std::sort(set.begin(), set.end());
     set.erase(std::unique(set.begin(), set.end()), set.end());
     LocalGrid g = grid_around(set, W);
