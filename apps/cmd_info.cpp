@@ -42,8 +42,9 @@ void run_info(const Context& ctx, const InfoArgs& a) {
   // A Möbius strip is cut open to be oriented: the topology above is the cut surface's (a disk).
   j["orientable"] = rep.cut_edges == 0;
   j["cut_edges"] = rep.cut_edges;
-  j["repaired_vertices"] = m.num_vertices();
-  j["repaired_faces"] = m.num_faces();
+  // The mesh the tools work on (triangulated, repaired), whose topology is reported above.
+  j["used_vertices"] = m.num_vertices();
+  j["used_triangles"] = m.num_faces();
   j["edges"] = topo.num_edges();
   j["surface_area"] = isochart::surface_area(m);
   j["bbox_diagonal"] = box.diagonal();

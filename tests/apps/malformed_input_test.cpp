@@ -325,6 +325,7 @@ TEST_CASE("the report is written atomically next to a good input", "[cli]") {
   CHECK(read_bytes(err).empty());
   const nlohmann::json j = nlohmann::json::parse(read_bytes(out));
   CHECK(j["faces"] == 4);
+  CHECK(j["used_triangles"] == 4);
   CHECK(j["closed"] == true);
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt", "report.json", "tetra.obj"});
   // An unwritable report path is a clear error too.
@@ -730,6 +731,16 @@ TEST_CASE("info shows the triangle counts its topology is of when the file has p
   CHECK(text.find("faces                6\n") != std::string::npos);
   CHECK(text.find("used                 8 vertices, 12 triangles, 18 edges") != std::string::npos);
   CHECK(text.find("euler characteristic 2\n") != std::string::npos);
+  const fs::path json = tmp.path / "out.json";
+  const std::string jcmd =
+      "'" + std::string(ISOCHARTS_CLI) + "' -q info '" + obj.string() + "' --json > '" + json.string() + "'";
+  REQUIRE(std::system(jcmd.c_str()) == 0);
+  std::ifstream jin(json);
+  const nlohmann::json j = nlohmann::json::parse(jin);
+  CHECK(j["faces"] == 6);
+  CHECK(j["polygons_triangulated"] == 6);
+  CHECK(j["used_vertices"] == 8);
+  CHECK(j["used_triangles"] == 12);
 }
 
 TEST_CASE("outputs with names of up to 255 bytes are written", "[cli]") {
