@@ -860,6 +860,19 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
       plots.push_back(f);
     }
   }
+  // Plots of an earlier run into the same directory (another mesh's sweep, or any plot under
+  // --no-plots) would be taken for this run's.
+  {
+    std::error_code ec;
+    std::vector<fs::path> stale;
+    for (const auto& e : fs::directory_iterator(out, ec)) {
+      const std::string name = e.path().filename().string();
+      const bool ours =
+          name == "psnr.png" || (name.rfind("stretch_", 0) == 0 && e.path().extension() == ".png");
+      if (ours && std::find(plots.begin(), plots.end(), name) == plots.end()) stale.push_back(e.path());
+    }
+    for (const auto& f : stale) fs::remove(f, ec);
+  }
   const double total = std::chrono::duration<double>(Clock::now() - t0).count();
   std::ostringstream doc;
   doc << md << "\nTotal " << fmt(total, 1) << " s; reference resolution " << a.res << "×" << a.res
@@ -926,7 +939,9 @@ void add_bench(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--res", args->res,
                   "Square MCGIM resolution of the first method; the others get its defined samples (±2%)")
       ->capture_default_str();
-  sub->add_option("--out", args->out, "Output directory (bench.md, bench.csv, sweep.csv, PNG plots)")
+  sub->add_option("--out", args->out,
+                  "Output directory (bench.md, bench.csv, sweep.csv, PNG plots; an earlier run's plots there "
+                  "are removed)")
       ->capture_default_str();
   sub->add_option("--data", args->data, "Shared data directory (meshes/, baseline_atlases/)")->capture_default_str();
   sub->add_option("--max-l2", args->max_l2, "L2 stretch bound of every method")->capture_default_str();

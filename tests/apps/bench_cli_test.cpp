@@ -279,6 +279,23 @@ TEST_CASE("bench: only external methods and no baseline atlas for the mesh: an n
   CHECK_THAT(text, Catch::Contains("No `external` rows for sphere: no baseline atlases in"));
 }
 
+TEST_CASE("bench: plots of an earlier run into the same directory are removed", "[bench]") {
+  const fs::path dir = fresh_dir("stale_plots");
+  const fs::path out = dir / "out", err = dir / "stderr.txt";
+  fs::create_directories(out);
+  for (const char* f : {"psnr.png", "stretch_bunny.png", "notes.png"}) std::ofstream(out / f) << "old";
+  REQUIRE(
+      run_cli("bench builtin:sphere --methods isochart --res 16 --psnr-samples 2000 --sweep none --no-plots "
+              "--out '" +
+                  out.string() + "'",
+              err) == 0);
+  CHECK_FALSE(fs::exists(out / "psnr.png"));
+  CHECK_FALSE(fs::exists(out / "stretch_bunny.png"));
+  // Files the bench does not write are the user's.
+  CHECK(fs::exists(out / "notes.png"));
+  CHECK(fs::exists(out / "bench.md"));
+}
+
 TEST_CASE("bench: bad inputs are one line and exit code 2", "[bench]") {
   const fs::path dir = fresh_dir("bad");
   const fs::path err = dir / "stderr.txt";
