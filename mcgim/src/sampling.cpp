@@ -26,11 +26,11 @@ using isochart::InputError;
 constexpr double kFixed = 4096.0;
 constexpr std::int64_t kHalf = 2048;
 
-// A bridge sample with a grid neighbour farther on the surface than this many times the
-// chart's mean surface length per texel spans a crack (see the neck retry in sample_charts).
-// Measured on the bridges of gargoyle and armadillo: 0.95-2.1 across shallow notches,
-// 2.7-25 across cracks.
-constexpr double kTornBridge = 2.5;
+// A bridge sample spans a crack when a grid neighbour lies farther on the surface than this
+// many times the length the offset has under the chart's map at either sample (see the neck
+// retry in sample_charts). Measured on bridges: 0.9-1.9 across shallow notches (armadillo,
+// skull, gargoyle, plane_holes), 2.1-23 across cracks; 3 gave the highest PSNR on gargoyle.
+constexpr double kTornBridge = 3.0;
 
 struct FixedPoint {
   std::int64_t x, y;
@@ -716,29 +716,30 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
   // A sample taken off as a bridge across a notch comes back only when no grid neighbour lies
   // far from it on the surface: across a crack deeper than a texel the block triangles would
   // join surface points far apart (gargoyle, a 13-chart atlas at 256²: a tear of 13-36-unit
-  // edges, 54.5 dB instead of 74), while across a shallow notch they follow the surface and
+  // edges, 54.5 dB instead of 78), while across a shallow notch they follow the surface and
   // keep its samples (armadillo at 64²: 0.65 dB).
   for (int c = 0; c < nc; ++c) {
     ChartRegion& r = s.regions[c];
     if (r.ring.empty() || r.cut_off < 16) continue;
     const Chart& chart = a.charts[c];
-    double area3 = 0, area2 = 0;
-    for (std::size_t lf = 0; lf < chart.local_faces.size(); ++lf) {
-      const Face& f = m.faces[chart.faces[lf]];
-      const Face& l = chart.local_faces[lf];
-      area3 +=
-          0.5 * norm(cross(m.positions[f[1]] - m.positions[f[0]], m.positions[f[2]] - m.positions[f[0]]));
-      area2 +=
-          0.5 * std::abs(cross(pl.texel[c][l[1]] - pl.texel[c][l[0]], pl.texel[c][l[2]] - pl.texel[c][l[0]]));
-    }
-    // Surface length of one texel in this chart.
-    const double texel3 = area2 > 0 ? std::sqrt(area3 / area2) : 0.0;
     auto hit_at = [&](int i) -> const Hit* {
       const auto h = std::lower_bound(hits[c].begin(), hits[c].end(), i,
                                       [](const Hit& x, int v) { return x.sample < v; });
       return h != hits[c].end() && h->sample == i ? &*h : nullptr;
     };
     auto hit_point = [&](const Hit& h) { return face_point(m, chart.faces[h.local_face], h.bary); };
+    // Surface length of a texel offset d in the hit's triangle (its affine map from texels).
+    auto surface_length = [&](const Hit& h, const Vec2d& d) {
+      const Face& f = m.faces[chart.faces[h.local_face]];
+      const Face& l = chart.local_faces[h.local_face];
+      const Vec2d u1 = pl.texel[c][l[1]] - pl.texel[c][l[0]], u2 = pl.texel[c][l[2]] - pl.texel[c][l[0]];
+      const double det = cross(u1, u2);
+      if (det == 0) return std::numeric_limits<double>::infinity();
+      // d = a u1 + b u2
+      const double wa = cross(d, u2) / det, wb = cross(u1, d) / det;
+      return norm((m.positions[f[1]] - m.positions[f[0]]) * wa +
+                  (m.positions[f[2]] - m.positions[f[0]]) * wb);
+    };
     std::vector<int> torn;
     for (int b : r.bridges) {
       const Hit* hb = hit_at(b);
@@ -752,8 +753,9 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
           if ((dx == 0 && dy == 0) || x < 0 || y < 0 || x >= W || y >= H) continue;
           const Hit* hn = hit_at(im.index(x, y));
           if (!hn) continue;
-          worst =
-              std::max(worst, norm(hit_point(*hn) - pb) / (texel3 * std::sqrt(double(dx * dx + dy * dy))));
+          const Vec2d d(dx, dy);
+          const double expect = std::max(surface_length(*hb, d), surface_length(*hn, d));
+          worst = std::max(worst, norm(hit_point(*hn) - pb) / expect);
         }
       if (worst > kTornBridge) torn.push_back(b);
     }
