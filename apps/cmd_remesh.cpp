@@ -347,25 +347,8 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     t << " -> " << out;
     for (const std::string& image : images) t << ", " << image;
     t << "\n";
-    // Too few samples for the charts' cut paths (a coarse level of a many-chart atlas): the
-    // remesh is written, but a pipeline reading only the exit code should hear about it.
-    const bool same_topology = s.topology.euler_characteristic == s.input_euler_characteristic &&
-                               s.topology.boundary_loops == s.input_boundary_loops && s.topology.edge_manifold();
-    if (!same_topology)
-      ctx.warn(out, std::to_string(s.width) + "x" + std::to_string(s.height) +
-                        " level does not keep the input's topology (euler " +
-                        std::to_string(s.topology.euler_characteristic) + ", input " +
-                        std::to_string(s.input_euler_characteristic) + "; boundary loops " +
-                        std::to_string(s.topology.boundary_loops) + ", input " +
-                        std::to_string(s.input_boundary_loops) + "): too few samples for its charts");
-    else if (!s.topology.manifold())
-      // Same counts, but a vertex where two boundary loops or sheets touch: most mesh tools
-      // refuse such a file or split the vertex (which changes the counts).
-      ctx.warn(out, std::to_string(s.width) + "x" + std::to_string(s.height) + " level has " +
-                        std::to_string(s.topology.nonmanifold_vertices) +
-                        (s.topology.nonmanifold_vertices == 1 ? " non-manifold vertex"
-                                                              : " non-manifold vertices") +
-                        " (pinched where the surface is thinner than its samples)");
+    const std::string warning = mcgim::topology_warning(s);
+    if (!warning.empty()) ctx.warn(out, warning);
   }
   nlohmann::json j;
   j["input"] = a.input;

@@ -37,8 +37,36 @@ void check_options(const LevelOptions& o) {
   if (!(o.fit_regularization > 0)) bad("fit_regularization must be > 0");
 }
 
+// Moves every chart by the same offset, within the image: where the sample grid falls on the
+// charts changes, their gaps do not. Returns false when the layout leaves no room for it.
+bool shift_layout(detail::Placement& pl, isochart::Vec2d shift) {
+  double lo_x = 1e300, lo_y = 1e300, hi_x = -1e300, hi_y = -1e300;
+  for (const auto& chart : pl.texel)
+    for (const auto& p : chart) {
+      lo_x = std::min(lo_x, p.x);
+      lo_y = std::min(lo_y, p.y);
+      hi_x = std::max(hi_x, p.x);
+      hi_y = std::max(hi_y, p.y);
+    }
+  // Each offset is taken forwards, or as the same phase backwards (one texel less).
+  auto fit = [](double s, double lo, double hi, double size, double& out) {
+    if (s == 0 || hi + s <= size) return out = s, true;
+    if (lo + s - 1 >= 0) return out = s - 1, true;
+    return false;
+  };
+  double sx = 0, sy = 0;
+  if (!fit(shift.x, lo_x, hi_x, pl.width, sx) || !fit(shift.y, lo_y, hi_y, pl.height, sy)) return false;
+  for (auto& chart : pl.texel)
+    for (auto& p : chart) {
+      p.x += sx;
+      p.y += sy;
+    }
+  return true;
+}
+
 Level build_once(const detail::AtlasCharts& a, const LevelOptions& o, const std::vector<double>& area_scale,
-                 std::vector<char>& strained, const isochart::Progress& progress) {
+                 std::vector<char>& strained, const isochart::Progress& progress,
+                 isochart::Vec2d shift = {0, 0}, bool* shifted = nullptr) {
   Level lv;
   LevelStats& st = lv.stats;
   st.width = o.width;
@@ -48,8 +76,12 @@ Level build_once(const detail::AtlasCharts& a, const LevelOptions& o, const std:
   st.input_euler_characteristic = a.input_euler;
   st.input_boundary_loops = a.input_boundary_loops;
 
-  const detail::Placement pl = detail::place_charts(a, o, area_scale, progress);
+  detail::Placement pl = detail::place_charts(a, o, area_scale, progress);
   st.seconds_packing = pl.seconds;
+  if (shifted) {
+    *shifted = shift_layout(pl, shift);
+    if (!*shifted) return lv;
+  }
 
   auto t0 = Clock::now();
   detail::Sampling sm = detail::sample_charts(a, pl, !o.repack, progress);
@@ -122,6 +154,8 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
   Level best = build_once(a, o, {}, first_strained, progress);
   int best_error = topology_error(best.stats);
   double best_enlargement = 1;
+  std::vector<double> best_scale;
+  std::vector<char> best_strained = first_strained;
   double spent = work_seconds(best.stats);
   const std::vector<long long> first_count = count_samples(best);
   for (const Ladder& ladder : kLadders) {
@@ -146,10 +180,35 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
       // The packer normalizes the total area, so the spread of the scales is what distorts.
       const double enlargement = *std::max_element(scale.begin(), scale.end()) /
                                  *std::min_element(scale.begin(), scale.end());
-      if (error < best_error || (error == best_error && enlargement < best_enlargement)) {
+      if (retry.remesh.mesh.num_faces() > 0 &&
+          (error < best_error || (error == best_error && enlargement < best_enlargement))) {
         best_error = error;
         best_enlargement = enlargement;
+        best_scale = scale;
+        best_strained = strained;
         best = std::move(retry);
+      }
+    }
+  }
+  // Still short of the topology: the best layout again with the sample grid at other phases
+  // on its charts (a hole a couple of texels across keeps its loop or not by where the sample
+  // centres fall around it).
+  static constexpr double kPhases[][2] = {{0.5, 0.5},   {0.5, 0},     {0, 0.5},    {0.25, 0.25},
+                                          {0.75, 0.75}, {0.25, 0.75}, {0.75, 0.25}};
+  if (o.repack && best_error > 0) {
+    for (const auto& ph : kPhases) {
+      std::vector<char> strained = best_strained;
+      bool shifted = false;
+      Level retry = build_once(a, o, best_scale, strained, progress, {ph[0], ph[1]}, &shifted);
+      if (!shifted) continue;
+      spent += work_seconds(retry.stats);
+      const int error = topology_error(retry.stats);
+      // An empty remesh has no topology to lose (a torus's Euler characteristic is 0).
+      if (error < best_error && retry.remesh.mesh.num_faces() > 0) {
+        retry.stats.enlarged_charts = best.stats.enlarged_charts;
+        best_error = error;
+        best = std::move(retry);
+        if (best_error == 0) break;
       }
     }
   }
@@ -159,6 +218,26 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
 }
 
 }  // namespace
+
+std::string topology_warning(const LevelStats& s) {
+  const std::string level = std::to_string(s.width) + "x" + std::to_string(s.height) + " level";
+  const TopologyCheck& t = s.topology;
+  // Too few samples for the charts' cut paths (a coarse level of a many-chart atlas): the
+  // remesh is written, but a pipeline reading only the exit code should hear about it.
+  if (t.euler_characteristic != s.input_euler_characteristic || t.boundary_loops != s.input_boundary_loops ||
+      !t.edge_manifold())
+    return level + " does not keep the input's topology (euler " + std::to_string(t.euler_characteristic) +
+           ", input " + std::to_string(s.input_euler_characteristic) + "; boundary loops " +
+           std::to_string(t.boundary_loops) + ", input " + std::to_string(s.input_boundary_loops) +
+           "): too few samples for its charts";
+  // Same counts, but a vertex where two boundary loops or sheets touch: most mesh tools refuse
+  // such a file or split the vertex (which changes the counts).
+  if (!t.manifold())
+    return level + " has " + std::to_string(t.nonmanifold_vertices) +
+           (t.nonmanifold_vertices == 1 ? " non-manifold vertex" : " non-manifold vertices") +
+           " (pinched where the surface is thinner than its samples)";
+  return {};
+}
 
 void check_not_empty(const Level& lv) {
   if (lv.remesh.mesh.num_faces() > 0) return;

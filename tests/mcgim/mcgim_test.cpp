@@ -633,6 +633,31 @@ TEST_CASE("a chart retried for a thin neck keeps a sub-texel crack open", "[mcgi
   check_both_squares_close(m, lv, res);
 }
 
+TEST_CASE("a level's topology warning names what it lost or where it is pinched", "[mcgim]") {
+  LevelStats s;
+  s.width = s.height = 64;
+  s.input_euler_characteristic = -25;
+  s.input_boundary_loops = 27;
+  s.topology.euler_characteristic = -25;
+  s.topology.boundary_loops = 27;
+  CHECK(topology_warning(s).empty());
+  s.topology.nonmanifold_vertices = 1;
+  CHECK(topology_warning(s) ==
+        "64x64 level has 1 non-manifold vertex (pinched where the surface is thinner than its samples)");
+  s.topology.nonmanifold_vertices = 3;
+  CHECK(topology_warning(s).rfind("64x64 level has 3 non-manifold vertices", 0) == 0);
+  s.topology.boundary_loops = 26;
+  s.topology.euler_characteristic = -24;
+  CHECK(topology_warning(s) ==
+        "64x64 level does not keep the input's topology (euler -24, input -25; boundary loops 26, input 27): "
+        "too few samples for its charts");
+  s.topology = {};
+  s.topology.euler_characteristic = -25;
+  s.topology.boundary_loops = 27;
+  s.topology.nonmanifold_edges = 1;
+  CHECK(topology_warning(s).find("does not keep the input's topology") != std::string::npos);
+}
+
 TEST_CASE("a pyramid level too small for the charts fails before the finer levels are built", "[mcgim]") {
   // --levels 1024,4 sampled and fitted the 1024² level (33 s) before finding 4x4 too small.
   const isochart::Mesh m = mcgim_test::cube_atlas(5);
@@ -792,9 +817,10 @@ TEST_CASE("a coarse level of a mesh with many small holes keeps every hole", "[m
   // plane_holes: 27 window holes, each about two texels across at 64², most inside the largest
   // chart, opened by slits. Whether a hole keeps three sample groups around it depends on where
   // the grid falls, so the level is rebuilt with enlarged charts until one layout keeps them
-  // all (edge-manifold with the input's Euler characteristic, as the remesh criterion asks; one
-  // vertex where two loops touch is still pinched); enlarging by ×4 per attempt only ever
-  // reached 26 loops, with charts enlarged 64×.
+  // all (edge-manifold with the input's Euler characteristic, as the remesh criterion asks; the
+  // best layout was pinched at one vertex where two loops touch until it was also tried at
+  // other phases of the sample grid); enlarging by ×4 per attempt only ever reached 26 loops,
+  // with charts enlarged 64×.
   const std::string path = std::string(ISOCHARTS_SHARED_DATA) + "/meshes/plane_holes.obj";
   const isochart::Mesh mesh = isochart::load_mesh(path).mesh;
   const isochart::Mesh atlas = isochart::build_atlas(mesh, isochart::AtlasOptions{}).apply_to(mesh);
@@ -806,6 +832,7 @@ TEST_CASE("a coarse level of a mesh with many small holes keeps every hole", "[m
   CHECK(t.boundary_loops == 27);
   CHECK(t.euler_characteristic == lv.stats.input_euler_characteristic);
   CHECK(t.nonmanifold_edges == 0);
+  CHECK(t.nonmanifold_vertices == 0);
   CHECK(t.components == 1);
   CHECK(lv.stats.enlarged_charts > 0);
 }

@@ -124,6 +124,11 @@ struct Level {
 Level build_level(const isochart::Mesh& atlas, const LevelOptions& options = {},
                   const isochart::Progress& progress = {});
 
+/// What is wrong with a level's remesh for a user, in one line ("WxH level does not keep the
+/// input's topology (...)" or "WxH level has N non-manifold vertices (...)"); empty when it
+/// keeps the input's Euler characteristic and boundary loops and is manifold.
+std::string topology_warning(const LevelStats& stats);
+
 /// \throw isochart::InputError("", "WxH level: no 2x2 block of defined samples, ...") when the
 ///        level's remesh has no triangle: its charts are too small for its resolution. An
 ///        empty remesh is no result; build_pyramid checks every level with it.
