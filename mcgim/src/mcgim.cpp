@@ -192,16 +192,18 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
   }
   // Still short of the topology: the best layout again with the sample grid at other phases
   // on its charts (a hole a couple of texels across keeps its loop or not by where the sample
-  // centres fall around it).
-  static constexpr double kPhases[][2] = {{0.5, 0.5},   {0.5, 0},     {0, 0.5},    {0.25, 0.25},
-                                          {0.75, 0.75}, {0.25, 0.75}, {0.75, 0.25}};
+  // centres fall around it): the half-texel phases, the quarter diagonals, then the rest of the
+  // quarter-texel grid (plane_holes at 64² first keeps its 27 windows at (¼, ½)).
+  static constexpr double kPhases[][2] = {{0.5, 0.5},   {0.5, 0},     {0, 0.5},    {0.25, 0.25}, {0.75, 0.75},
+                                          {0.25, 0.75}, {0.75, 0.25}, {0.25, 0.5}, {0.5, 0.25},  {0.75, 0.5},
+                                          {0.5, 0.75},  {0.25, 0},    {0, 0.25},   {0.75, 0},    {0, 0.75}};
   if (o.repack && best_error > 0) {
     for (const auto& ph : kPhases) {
       std::vector<char> strained = best_strained;
       bool shifted = false;
       Level retry = build_once(a, o, best_scale, strained, progress, {ph[0], ph[1]}, &shifted);
+      spent += work_seconds(retry.stats);  // a layout with no room to shift was still packed
       if (!shifted) continue;
-      spent += work_seconds(retry.stats);
       const int error = topology_error(retry.stats);
       // An empty remesh has no topology to lose (a torus's Euler characteristic is 0).
       if (error < best_error && retry.remesh.mesh.num_faces() > 0) {
