@@ -26,10 +26,10 @@ using isochart::InputError;
 constexpr double kFixed = 4096.0;
 constexpr std::int64_t kHalf = 2048;
 
-// A bridge sample spans a crack when a grid neighbour lies farther on the surface than this
-// many times the length the offset has under the chart's map at either sample (see the neck
-// retry in sample_charts). Measured on bridges: 0.9-1.9 across shallow notches (armadillo,
-// skull, gargoyle, plane_holes), 2.1-23 across cracks; 3 gave the highest PSNR on gargoyle.
+// A bridge sample or touched texel spans a crack when a grid neighbour lies farther on the
+// surface than this many times the length the offset has under the chart's map at either
+// sample (see the neck retry in sample_charts). Measured on bridges: 0.9-1.9 across shallow notches
+// (armadillo, skull, gargoyle, plane_holes), 2.1-23 across cracks; 3 gave the highest PSNR on gargoyle.
 constexpr double kTornBridge = 3.0;
 
 struct FixedPoint {
@@ -638,11 +638,11 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
         }
     return true;
   };
-  auto define_closest = [&](int c, int i) {
+  // The point of chart c closest to sample i's centre in texel space.
+  auto closest_hit = [&](int c, int i) {
     const Chart& ch = a.charts[c];
     const Vec2d p{i % W + 0.5, i / W + 0.5};
-    int best_face = 0;
-    Vec3d best_bary;
+    Hit h{i, 0, {}};
     double best = 1e300;
     for (std::size_t lf = 0; lf < ch.local_faces.size(); ++lf) {
       Vec3d b;
@@ -650,13 +650,19 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
       const double d = closest_on_triangle(p, pl.texel[c][f[0]], pl.texel[c][f[1]], pl.texel[c][f[2]], b);
       if (d < best) {
         best = d;
-        best_face = static_cast<int>(lf);
-        best_bary = b;
+        h.local_face = static_cast<int>(lf);
+        h.bary = b;
       }
     }
-    const int pf = ch.faces[best_face];
+    return h;
+  };
+  auto define_closest = [&](int c, int i) {
+    const Chart& ch = a.charts[c];
+    const Hit h = closest_hit(c, i);
+    const Vec3d& best_bary = h.bary;
+    const int pf = ch.faces[h.local_face];
     const Face& f = m.faces[pf];
-    const Face& lf = ch.local_faces[best_face];
+    const Face& lf = ch.local_faces[h.local_face];
     s.param[i] = pl.texel[c][lf[0]] * best_bary.x + pl.texel[c][lf[1]] * best_bary.y + pl.texel[c][lf[2]] * best_bary.z;
     im.chart[i] = c;
     im.face[i] = pf;
@@ -713,11 +719,13 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
   // A part of a chart joined to the rest by a neck thinner than a sample was cut off above and
   // would be contracted with all its surface. Such charts are tried again with the free texels
   // they touch added, which carries the neck across; the result is kept when it holds more.
-  // A sample taken off as a bridge across a notch comes back only when no grid neighbour lies
-  // far from it on the surface: across a crack deeper than a texel the block triangles would
-  // join surface points far apart (gargoyle, a 13-chart atlas at 256²: a tear of 13-36-unit
-  // edges, 54.5 dB instead of 78), while across a shallow notch they follow the surface and
-  // keep its samples (armadillo at 64²: 0.65 dB).
+  // A sample taken off as a bridge across a notch, or a touched texel (whose closest point
+  // stands for it), comes back only when no grid neighbour lies far from it on the surface:
+  // across a crack deeper than a texel the block triangles would join surface points far apart
+  // (gargoyle, a 13-chart atlas at 256²: a tear of 13-36-unit edges, 54.5 dB instead of 78;
+  // skull's atlas at --max-l2 1.05, 256²: touched texels in a crack, 74.1 dB instead of 85.0),
+  // while across a shallow notch they follow the surface and keep its samples (armadillo at
+  // 64²: 0.65 dB).
   for (int c = 0; c < nc; ++c) {
     ChartRegion& r = s.regions[c];
     if (r.ring.empty() || r.cut_off < 16) continue;
@@ -740,9 +748,23 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
       return norm((m.positions[f[1]] - m.positions[f[0]]) * wa +
                   (m.positions[f[2]] - m.positions[f[0]]) * wb);
     };
+    // Free texels the chart touches without covering their centres: each stands for its
+    // closest point of the chart, which across a crack is on one side only.
+    const std::vector<int> touched = touched_texels(c);
+    std::vector<Hit> fringe;
+    for (int t : touched)
+      if (!hit_at(t) && free_for(c, t % W, t / W)) fringe.push_back(closest_hit(c, t));
+    auto point_at = [&](int i) -> const Hit* {
+      if (const Hit* h = hit_at(i)) return h;
+      const auto h =
+          std::lower_bound(fringe.begin(), fringe.end(), i, [](const Hit& x, int v) { return x.sample < v; });
+      return h != fringe.end() && h->sample == i ? &*h : nullptr;
+    };
+    std::vector<int> tested = r.bridges;
+    for (const Hit& h : fringe) tested.push_back(h.sample);
     std::vector<int> torn;
-    for (int b : r.bridges) {
-      const Hit* hb = hit_at(b);
+    for (int b : tested) {
+      const Hit* hb = point_at(b);
       if (!hb) continue;
       const Vec3d pb = hit_point(*hb);
       const int bx = b % W, by = b / W;
@@ -751,7 +773,7 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
         for (int dx = -1; dx <= 1; ++dx) {
           const int x = bx + dx, y = by + dy;
           if ((dx == 0 && dy == 0) || x < 0 || y < 0 || x >= W || y >= H) continue;
-          const Hit* hn = hit_at(im.index(x, y));
+          const Hit* hn = point_at(im.index(x, y));
           if (!hn) continue;
           const Vec2d d(dx, dy);
           const double expect = std::max(surface_length(*hb, d), surface_length(*hn, d));
@@ -759,11 +781,12 @@ Sampling sample_charts(const AtlasCharts& a, const Placement& pl, bool check_gap
         }
       if (worst > kTornBridge) torn.push_back(b);
     }
+    std::sort(torn.begin(), torn.end());
     auto torn_bridge = [&](int i) { return std::binary_search(torn.begin(), torn.end(), i); };
     std::vector<int> set = r.samples;
     for (const Hit& h : hits[c])
       if (!torn_bridge(h.sample) && free_for(c, h.sample % W, h.sample / W)) set.push_back(h.sample);
-    for (int t : touched_texels(c))
+    for (int t : touched)
       if (!torn_bridge(t) && free_for(c, t % W, t / W)) set.push_back(t);
     std::sort(set.begin(), set.end());
     set.erase(std::unique(set.begin(), set.end()), set.end());
