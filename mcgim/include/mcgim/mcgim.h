@@ -81,6 +81,7 @@ struct LevelStats {
   /// loses the input's topology (charts too small for a triangle of samples collapse), the
   /// level is rebuilt with its sparsest charts enlarged (×1.5 per attempt, up to 13 times,
   /// then ×4 up to 5 times) until it keeps the topology; the least enlarged of the best is kept.
+  /// Still short of it, that layout is tried at the other phases of a quarter-texel grid.
   int enlarged_charts = 0;
   long long defined_samples = 0;
   long long removed_samples = 0;  ///< covered samples dropped to make each chart a disk
