@@ -29,22 +29,26 @@ inline isochart::Vec3d to_vec(const Point3& p) { return {p.x(), p.y(), p.z()}; }
 struct TriangleSet {
   std::vector<Triangle3> triangles;
   std::vector<int> face;
+  std::vector<int> triangle_of;  ///< per mesh face, its index in `triangles` or −1 (zero area)
   AabbTree tree;
 
-  explicit TriangleSet(const isochart::Mesh& m) {
+  /// Without `accelerate`, only searches that bring their own start (ClosestPoints) are fast:
+  /// CGAL's distance queries would scan for one.
+  explicit TriangleSet(const isochart::Mesh& m, bool accelerate = true) : triangle_of(m.num_faces(), -1) {
     for (int f = 0; f < m.num_faces(); ++f) {
       const auto& v = m.faces[f];
       const isochart::Vec3d& a = m.positions[v[0]];
       const isochart::Vec3d& b = m.positions[v[1]];
       const isochart::Vec3d& c = m.positions[v[2]];
       if (!(norm(cross(b - a, c - a)) > 0)) continue;
+      triangle_of[f] = static_cast<int>(triangles.size());
       triangles.emplace_back(to_point(a), to_point(b), to_point(c));
       face.push_back(f);
     }
     if (triangles.empty()) return;
     tree.insert(triangles.begin(), triangles.end());
     tree.build();
-    tree.accelerate_distance_queries();
+    if (accelerate) tree.accelerate_distance_queries();
   }
   bool empty() const { return triangles.empty(); }
   int face_of(TriangleIterator it) const { return face[static_cast<std::size_t>(it - triangles.begin())]; }

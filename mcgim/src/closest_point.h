@@ -22,6 +22,12 @@ class ClosestPoints {
     isochart::Vec3d point;
   };
   Hit closest(const isochart::Vec3d& p) const;
+  /// The same closest point, found faster from a point of the surface near p (`near.point`
+  /// on face `near.face`): it bounds the search from the start. A face of zero area or −1
+  /// is no hint.
+  Hit closest(const isochart::Vec3d& p, const Hit& near) const;
+  /// The point of face f at barycentric coordinates b; face −1 when f has zero area.
+  Hit point_at(int f, const isochart::Vec3d& b) const;
 
  private:
   struct Impl;

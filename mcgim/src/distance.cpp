@@ -20,6 +20,11 @@ namespace mcgim {
 
 namespace {
 
+using detail::AabbPrimitive;
+using detail::Kernel;
+using detail::Point3;
+using detail::Triangle3;
+using detail::TriangleIterator;
 using isochart::Mesh;
 using isochart::Vec3d;
 
@@ -55,6 +60,62 @@ std::vector<Vec3d> sample_surface(const Mesh& m, long long n, std::uint64_t seed
   return pts;
 }
 
+// Squared distance from q to a box [lo, hi] (0 inside), per axis.
+inline double axis_gap2(double q, double lo, double hi) {
+  const double d = q < lo ? lo - q : (q > hi ? q - hi : 0.0);
+  return d * d;
+}
+inline double box_distance2(const Point3& q, const CGAL::Bbox_3& b) {
+  return axis_gap2(q.x(), b.xmin(), b.xmax()) + axis_gap2(q.y(), b.ymin(), b.ymax()) +
+         axis_gap2(q.z(), b.zmin(), b.zmax());
+}
+inline double triangle_box_distance2(const Point3& q, const Triangle3& t) {
+  const Point3 &a = t[0], &b = t[1], &c = t[2];
+  return axis_gap2(q.x(), std::min({a.x(), b.x(), c.x()}), std::max({a.x(), b.x(), c.x()})) +
+         axis_gap2(q.y(), std::min({a.y(), b.y(), c.y()}), std::max({a.y(), b.y(), c.y()})) +
+         axis_gap2(q.z(), std::min({a.z(), b.z(), c.z()}), std::max({a.z(), b.z(), c.z()}));
+}
+
+// Closest-point search for AABB_tree::traversal_with_priority: nearer boxes first, and a
+// triangle is projected only when its own box is nearer than the best point so far (CGAL's
+// own closest-point traits project every triangle of a visited leaf, in tree order).
+struct NearestFirst {
+  using Priority = double;
+  Point3 best;
+  double best2;
+  TriangleIterator best_id;
+
+  bool go_further() const { return true; }
+  void intersection(const Point3& q, const AabbPrimitive& pr) {
+    const Triangle3& t = pr.datum();
+    if (triangle_box_distance2(q, t) > best2) return;
+    const Point3 c = Kernel::Construct_projected_point_3()(t, q);
+    const double d2 = CGAL::squared_distance(q, c);
+    // On a tie the later triangle wins, as in CGAL's own search.
+    if (d2 < best2 || (d2 == best2 && c != best)) {
+      best = c;
+      best2 = d2;
+      best_id = pr.id();
+    }
+  }
+  template <class Node>
+  bool do_intersect(const Point3& q, const Node& node) const {
+    return box_distance2(q, node.bbox()) < best2;
+  }
+  template <class Node>
+  std::pair<bool, double> do_intersect_with_priority(const Point3& q, const Node& node) const {
+    const double d2 = box_distance2(q, node.bbox());
+    return {d2 < best2, -d2};
+  }
+};
+
+// The closest point of `set` to q, from a start (best, best2, best_id) that is a point of the
+// surface, or from none (best2 infinite).
+NearestFirst nearest_point(const detail::TriangleSet& set, const Point3& q, NearestFirst start) {
+  set.tree.traversal_with_priority(q, start);
+  return start;
+}
+
 // Squared distances from `pts` to the surface, in parallel; the caller reduces in order.
 std::vector<double> distances2(const std::vector<Vec3d>& pts, const detail::TriangleSet& target,
                                const isochart::Progress& progress, double f0, double f1) {
@@ -64,8 +125,17 @@ std::vector<double> distances2(const std::vector<Vec3d>& pts, const detail::Tria
   std::atomic<std::size_t> done{0};
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
     const std::size_t end = std::min(pts.size(), (c + 1) * chunk);
-    for (std::size_t i = c * chunk; i < end; ++i)
-      d2[i] = target.tree.squared_distance(detail::to_point(pts[i]));
+    // Consecutive points lie close together (sample_surface goes face by face), so each
+    // search starts from the previous point's answer.
+    NearestFirst prev{detail::to_point(pts[c * chunk]), std::numeric_limits<double>::infinity(),
+                      target.triangles.cbegin()};
+    for (std::size_t i = c * chunk; i < end; ++i) {
+      const Point3 q = detail::to_point(pts[i]);
+      NearestFirst start = prev;
+      if (i > c * chunk) start.best2 = CGAL::squared_distance(q, prev.best);
+      prev = nearest_point(target, q, start);
+      d2[i] = prev.best2;
+    }
     const std::size_t n = ++done;
     isochart::report(progress, isochart::Stage::Distance, f0 + (f1 - f0) * static_cast<double>(n) / chunks);
   });
@@ -77,7 +147,7 @@ std::vector<double> distances2(const std::vector<Vec3d>& pts, const detail::Tria
 namespace detail {
 
 struct ClosestPoints::Impl {
-  explicit Impl(const Mesh& m) : set(m) {}
+  explicit Impl(const Mesh& m) : set(m, false) {}
   TriangleSet set;
 };
 
@@ -86,8 +156,32 @@ ClosestPoints::~ClosestPoints() = default;
 bool ClosestPoints::empty() const { return impl_->set.empty(); }
 
 ClosestPoints::Hit ClosestPoints::closest(const Vec3d& p) const {
-  const auto cp = impl_->set.tree.closest_point_and_primitive(to_point(p));
-  return {impl_->set.face_of(cp.second), to_vec(cp.first)};
+  const TriangleSet& set = impl_->set;
+  const Point3 q = to_point(p);
+  // No start: the first triangle reached, nearest box first, sets the bound.
+  const NearestFirst hit =
+      nearest_point(set, q, {q, std::numeric_limits<double>::infinity(), set.triangles.cbegin()});
+  return {set.face_of(hit.best_id), to_vec(hit.best)};
+}
+
+ClosestPoints::Hit ClosestPoints::closest(const Vec3d& p, const Hit& near) const {
+  const TriangleSet& set = impl_->set;
+  if (near.face < 0 || near.face >= static_cast<int>(set.triangle_of.size()) ||
+      set.triangle_of[near.face] < 0)
+    return closest(p);
+  const Point3 q = to_point(p);
+  const NearestFirst hit =
+      nearest_point(set, q,
+                    {to_point(near.point), CGAL::squared_distance(q, to_point(near.point)),
+                     set.triangles.cbegin() + set.triangle_of[near.face]});
+  return {set.face_of(hit.best_id), to_vec(hit.best)};
+}
+
+ClosestPoints::Hit ClosestPoints::point_at(int f, const Vec3d& b) const {
+  const TriangleSet& set = impl_->set;
+  if (f < 0 || f >= static_cast<int>(set.triangle_of.size()) || set.triangle_of[f] < 0) return {};
+  const Triangle3& t = set.triangles[set.triangle_of[f]];
+  return {f, to_vec(t[0]) * b.x + to_vec(t[1]) * b.y + to_vec(t[2]) * b.z};
 }
 
 Vec3d barycentric_of(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
@@ -122,7 +216,7 @@ DistanceResult measure_distance(const Mesh& a, const Mesh& b, const DistanceOpti
   DistanceResult r;
   const std::vector<Vec3d> pa = sample_surface(a, o.samples, isochart::mix_seed(o.seed, 0xA), "A");
   const std::vector<Vec3d> pb = sample_surface(b, o.samples, isochart::mix_seed(o.seed, 0xB), "B");
-  const detail::TriangleSet ta(a), tb(b);
+  const detail::TriangleSet ta(a, false), tb(b, false);
   const std::vector<double> dab = distances2(pa, tb, progress, 0.0, 0.5);
   const std::vector<double> dba = distances2(pb, ta, progress, 0.5, 1.0);
   double sab = 0, sba = 0, mab = 0, mba = 0;

@@ -1,13 +1,14 @@
 #include "optimize_samples.h"
 
-#include <Eigen/LU>
-#include <Eigen/Sparse>
-#include <Eigen/IterativeLinearSolvers>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/LU>
+#include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "closest_point.h"
@@ -147,30 +148,64 @@ void surface_points(const Mesh& mesh, double texel_area, std::vector<Vec3d>& pts
   }
 }
 
+// Where sample i was taken on the original surface (face −1 if unknown): a close start for
+// exact closest-point queries near the sample, however far the fit has moved it since.
+ClosestPoints::Hit source_of(const ClosestPoints& original, const GeometryImage& im, int i) {
+  return im.face.empty() ? ClosestPoints::Hit{} : original.point_at(im.face[i], im.barycentric[i]);
+}
+
+// Of n candidate hits, the one nearest to q (face −1 if none is known).
+ClosestPoints::Hit nearest(const ClosestPoints::Hit* h, int n, const Vec3d& q) {
+  ClosestPoints::Hit best;
+  double best2 = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < n; ++k)
+    if (h[k].face >= 0 && squared_norm(h[k].point - q) < best2) {
+      best2 = squared_norm(h[k].point - q);
+      best = h[k];
+    }
+  return best;
+}
+
 // Geometric correspondences (Hoppe et al. 1993's distance energy, both ways): each original
 // point to its closest point on the remesh, and each remesh face centroid to its closest point
 // on the original.
 std::vector<FitPoint> closest_points(const ClosestPoints& original, const std::vector<Vec3d>& pts,
                                      const std::vector<double>& area, const std::vector<int>& pts_face,
-                                     const std::vector<Vec3d>& original_normals, const Remesh& r) {
+                                     const std::vector<Vec3d>& original_normals, const GeometryImage& im,
+                                     const Remesh& r) {
   const ClosestPoints remesh(r.mesh);
   const std::size_t no = pts.size();
   const int nf = r.mesh.num_faces();
   std::vector<FitPoint> out(no + static_cast<std::size_t>(nf));
   if (remesh.empty()) return {};
+  std::vector<int> hit_face(nf);
+  tbb::parallel_for(0, nf, [&](int f) {
+    const auto& F = r.mesh.faces[f];
+    const Vec3d a = r.mesh.positions[F[0]], b = r.mesh.positions[F[1]], c = r.mesh.positions[F[2]];
+    const Vec3d centroid = (a + b + c) / 3.0;
+    const auto& fs = r.face_samples[f];
+    const ClosestPoints::Hit s[3] = {source_of(original, im, fs[0]), source_of(original, im, fs[1]),
+                                     source_of(original, im, fs[2])};
+    const ClosestPoints::Hit h = original.closest(centroid, nearest(s, 3, centroid));
+    hit_face[f] = h.face;
+    out[no + f] = {f, {1.0 / 3, 1.0 / 3, 1.0 / 3}, h.point, isochart::triangle_area(a, b, c),
+                   original_normals[h.face]};
+  });
+  // Per original face, the first remesh face whose centroid lands on it: its centroid starts
+  // the search for the original points of that face.
+  std::vector<int> landed(original_normals.size(), -1);
+  for (int f = nf - 1; f >= 0; --f) landed[hit_face[f]] = f;
   tbb::parallel_for(std::size_t(0), no, [&](std::size_t k) {
-    const ClosestPoints::Hit h = remesh.closest(pts[k]);
+    ClosestPoints::Hit start;
+    if (const int f = landed[pts_face[k]]; f >= 0) {
+      const auto& F = r.mesh.faces[f];
+      start = {f, (r.mesh.positions[F[0]] + r.mesh.positions[F[1]] + r.mesh.positions[F[2]]) / 3.0};
+    }
+    const ClosestPoints::Hit h = remesh.closest(pts[k], start);
     const auto& f = r.mesh.faces[h.face];
     out[k] = {h.face,
               barycentric_of(h.point, r.mesh.positions[f[0]], r.mesh.positions[f[1]], r.mesh.positions[f[2]]),
               pts[k], area[k], original_normals[pts_face[k]]};
-  });
-  tbb::parallel_for(0, nf, [&](int f) {
-    const auto& F = r.mesh.faces[f];
-    const Vec3d a = r.mesh.positions[F[0]], b = r.mesh.positions[F[1]], c = r.mesh.positions[F[2]];
-    const ClosestPoints::Hit h = original.closest((a + b + c) / 3.0);
-    out[no + f] = {f, {1.0 / 3, 1.0 / 3, 1.0 / 3}, h.point, isochart::triangle_area(a, b, c),
-                   original_normals[h.face]};
   });
   return out;
 }
@@ -429,7 +464,9 @@ void choose_diagonals(const ClosestPoints& original, const Remesh& r, bool inter
       if (interior_only && (group_size[g[0]] > 1 || group_size[g[1]] > 1 || group_size[g[2]] > 1 || group_size[g[3]] > 1))
         continue;
       const Vec3d p[4] = {im.positions[c[0]], im.positions[c[1]], im.positions[c[2]], im.positions[c[3]]};
-      auto d2 = [&](const Vec3d& q) { return squared_norm(original.closest(q).point - q); };
+      const ClosestPoints::Hit s[4] = {source_of(original, im, c[0]), source_of(original, im, c[1]),
+                                       source_of(original, im, c[2]), source_of(original, im, c[3])};
+      auto d2 = [&](const Vec3d& q) { return squared_norm(original.closest(q, nearest(s, 4, q)).point - q); };
       const double e02 = d2((p[0] + p[2]) * 0.5) + d2((p[0] + p[1] + p[2]) / 3.0) + d2((p[0] + p[2] + p[3]) / 3.0);
       const double e13 = d2((p[1] + p[3]) * 0.5) + d2((p[0] + p[1] + p[3]) / 3.0) + d2((p[1] + p[2] + p[3]) / 3.0);
       const char want = e13 < e02 ? 1 : 0;
@@ -546,8 +583,8 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
       isochart::report(progress, isochart::Stage::Optimization,
                        static_cast<double>(o.optimize_iterations + it) / passes);
       if (diagonals) pick_diagonals();
-      solve_plane(closest_points(original, pts, area, pts_face, original_normals, r), group_anchor, plane_lambda,
-                  max_move, im, r);
+      solve_plane(closest_points(original, pts, area, pts_face, original_normals, im, r), group_anchor,
+                  plane_lambda, max_move, im, r);
     }
     if (diagonals && o.geometric_iterations > 0) pick_diagonals();
   }
