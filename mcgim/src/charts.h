@@ -2,6 +2,8 @@
 // Internal: the charts of an atlas, their boundary loops, and the cut graph along which
 // neighbouring charts are zippered (Sander et al. 2003 §3.2: cut-nodes and cut-paths).
 
+#include <memory>
+#include <mutex>
 #include <vector>
 
 #include "isochart/mesh.h"
@@ -57,8 +59,22 @@ struct CutPath {
   double length() const { return arclen.empty() ? 0.0 : arclen.back(); }
 };
 
+class ClosestPoints;  // closest_point.h
+
+// What the sample fit needs of the input surface: its closest-point search and face normals,
+// built on first use (see original_surface in optimize_samples.cpp) and kept for every level and
+// retry of the atlas (a coarse level's retries each rebuilt the search tree).
+struct SurfaceCache {
+  std::once_flag once;
+  std::unique_ptr<ClosestPoints> closest;
+  std::vector<Vec3d> face_normals;
+  SurfaceCache();
+  ~SurfaceCache();
+};
+
 struct AtlasCharts {
   const Mesh* mesh = nullptr;
+  std::shared_ptr<SurfaceCache> surface = std::make_shared<SurfaceCache>();
   isochart::Topology topology;
   std::vector<Vec3d> vertex_normals;
   std::vector<Chart> charts;

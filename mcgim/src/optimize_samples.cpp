@@ -148,6 +148,15 @@ void surface_points(const Mesh& mesh, double texel_area, std::vector<Vec3d>& pts
   }
 }
 
+const SurfaceCache& original_surface(const AtlasCharts& a) {
+  SurfaceCache& s = *a.surface;
+  std::call_once(s.once, [&] {
+    s.closest = std::make_unique<ClosestPoints>(*a.mesh);
+    s.face_normals = isochart::face_normals(*a.mesh);
+  });
+  return s;
+}
+
 // Where sample i was taken on the original surface (face −1 if unknown): a close start for
 // exact closest-point queries near the sample, however far the fit has moved it since.
 ClosestPoints::Hit source_of(const ClosestPoints& original, const GeometryImage& im, int i) {
@@ -509,6 +518,9 @@ bool same_topology(const TopologyCheck& a, const TopologyCheck& b) {
 
 }  // namespace
 
+SurfaceCache::SurfaceCache() = default;
+SurfaceCache::~SurfaceCache() = default;
+
 void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vector<Vec2d>& param,
                       const LevelOptions& o, GeometryImage& im, Remesh& r, const isochart::Progress& progress) {
   const int defined = im.defined_samples();
@@ -542,12 +554,13 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
     solve(pts, group_anchor, lambda, max_move, im, r);
   }
   if (o.geometric_iterations > 0) {
-    const ClosestPoints original(*a.mesh);
+    const SurfaceCache& surface = original_surface(a);
+    const ClosestPoints& original = *surface.closest;
     std::vector<Vec3d> pts;
     std::vector<double> area;
     std::vector<int> pts_face;
     surface_points(*a.mesh, texel_area, pts, area, pts_face);
-    const std::vector<Vec3d> original_normals = isochart::face_normals(*a.mesh);
+    const std::vector<Vec3d>& original_normals = surface.face_normals;
     // Fitted diagonals may not take the remesh further from the input's topology, nor change
     // its figures at the same distance; they may bring it closer (at coarse levels, where the
     // zippered seams are short, the old diagonals sometimes used an edge twice). Should the
