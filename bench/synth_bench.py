@@ -9,7 +9,7 @@ Usage: bench/synth_bench.py [--cli build/apps/isocharts] [--data ../shared/data]
                             [--out bench_out/synth] [--threads 2] [--pixels-per-texel 1.0]
                             [--renders DIR] [--only MESH ...] [--skip-determinism]
 The JSON of every run is kept in --out; renders (1000x250 PNG, four views of the mesh on its
-iso-chart atlas) go to --renders (default: --out). Python 3 standard library only.
+iso-chart atlas) go to --renders (default: --out, as MESH_EXEMPLAR_render.png). Python 3 standard library only.
 """
 
 import argparse
@@ -66,7 +66,9 @@ def main():
             j, wall = synth(a.cli, os.path.join(a.data, rel), os.path.join(a.data, "exemplars", ex), out,
                             a.threads, a.pixels_per_texel)
             stem = out[: -len(".glb")]
-            render = os.path.join(renders, "%s_%s.png" % (mesh_name, ex_name))
+            # In --out itself, the render must not take the synthesized texture's name.
+            suffix = "_render" if os.path.abspath(renders) == os.path.abspath(a.out) else ""
+            render = os.path.join(renders, "%s_%s%s.png" % (mesh_name, ex_name, suffix))
             subprocess.run([a.cli, "render", stem + ".obj", "--texture", stem + ".png", "--views", "4",
                             "--width", "1000", "--height", "250", "--up", UP.get(mesh_name, "y"), "-o", render, "-q"], check=True,
                            capture_output=True)
