@@ -78,3 +78,23 @@ TEST_CASE("closest points from any start are the exact closest points", "[mcgim]
   // A face of zero area or none is no start: the search still answers.
   CHECK(cp.closest(m.positions[0], {}).face >= 0);
 }
+
+TEST_CASE("a face of zero area is never a start or an answer of the closest-point search",
+          "[mcgim][closest]") {
+  // Two triangles of the unit square at z = 0, and a sliver with collinear corners above them.
+  isochart::Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 0.5}, {1, 0, 0.5}, {2, 0, 0.5}};
+  m.faces = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}};
+  const mcgim::detail::ClosestPoints cp(m);
+  CHECK(cp.point_at(2, {1.0 / 3, 1.0 / 3, 1.0 / 3}).face == -1);
+  CHECK(cp.point_at(-1, {1.0 / 3, 1.0 / 3, 1.0 / 3}).face == -1);
+  CHECK(cp.point_at(0, {1.0 / 3, 1.0 / 3, 1.0 / 3}).face == 0);
+  // Right on the sliver: the answer is the square below it, from any start.
+  const Vec3d p{0.5, 0.0, 0.5};
+  for (const auto& start : {mcgim::detail::ClosestPoints::Hit{}, mcgim::detail::ClosestPoints::Hit{2, p},
+                            cp.point_at(1, {0.2, 0.3, 0.5})}) {
+    const auto h = cp.closest(p, start);
+    CHECK(h.face == 0);
+    CHECK(norm(h.point - Vec3d{0.5, 0.0, 0.0}) < 1e-12);
+  }
+}
