@@ -32,8 +32,8 @@ struct TriangleSet {
   std::vector<int> triangle_of;  ///< per mesh face, its index in `triangles` or −1 (zero area)
   AabbTree tree;
 
-  /// Without `accelerate`, only searches that bring their own start (ClosestPoints) are fast:
-  /// CGAL's distance queries would scan for one.
+  /// Without `accelerate` (no kd-tree of start points), CGAL's own distance queries would scan
+  /// for a start; the nearest-first searches of distance.cpp do not need one.
   explicit TriangleSet(const isochart::Mesh& m, bool accelerate = true) : triangle_of(m.num_faces(), -1) {
     for (int f = 0; f < m.num_faces(); ++f) {
       const auto& v = m.faces[f];
@@ -51,6 +51,10 @@ struct TriangleSet {
     if (accelerate) tree.accelerate_distance_queries();
   }
   bool empty() const { return triangles.empty(); }
+  /// Index in `triangles` of mesh face f; −1 for a face of zero area or no face.
+  int triangle_index(int f) const {
+    return f >= 0 && f < static_cast<int>(triangle_of.size()) ? triangle_of[f] : -1;
+  }
   int face_of(TriangleIterator it) const { return face[static_cast<std::size_t>(it - triangles.begin())]; }
 };
 

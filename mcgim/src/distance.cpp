@@ -166,22 +166,21 @@ ClosestPoints::Hit ClosestPoints::closest(const Vec3d& p) const {
 
 ClosestPoints::Hit ClosestPoints::closest(const Vec3d& p, const Hit& near) const {
   const TriangleSet& set = impl_->set;
-  if (near.face < 0 || near.face >= static_cast<int>(set.triangle_of.size()) ||
-      set.triangle_of[near.face] < 0)
-    return closest(p);
+  const int t = set.triangle_index(near.face);
+  if (t < 0) return closest(p);
   const Point3 q = to_point(p);
-  const NearestFirst hit =
-      nearest_point(set, q,
-                    {to_point(near.point), CGAL::squared_distance(q, to_point(near.point)),
-                     set.triangles.cbegin() + set.triangle_of[near.face]});
+  const NearestFirst hit = nearest_point(
+      set, q,
+      {to_point(near.point), CGAL::squared_distance(q, to_point(near.point)), set.triangles.cbegin() + t});
   return {set.face_of(hit.best_id), to_vec(hit.best)};
 }
 
 ClosestPoints::Hit ClosestPoints::point_at(int f, const Vec3d& b) const {
   const TriangleSet& set = impl_->set;
-  if (f < 0 || f >= static_cast<int>(set.triangle_of.size()) || set.triangle_of[f] < 0) return {};
-  const Triangle3& t = set.triangles[set.triangle_of[f]];
-  return {f, to_vec(t[0]) * b.x + to_vec(t[1]) * b.y + to_vec(t[2]) * b.z};
+  const int t = set.triangle_index(f);
+  if (t < 0) return {};
+  const Triangle3& tri = set.triangles[t];
+  return {f, to_vec(tri[0]) * b.x + to_vec(tri[1]) * b.y + to_vec(tri[2]) * b.z};
 }
 
 Vec3d barycentric_of(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {

@@ -157,10 +157,14 @@ const SurfaceCache& original_surface(const AtlasCharts& a) {
   return s;
 }
 
-// Where sample i was taken on the original surface (face −1 if unknown): a close start for
-// exact closest-point queries near the sample, however far the fit has moved it since.
-ClosestPoints::Hit source_of(const ClosestPoints& original, const GeometryImage& im, int i) {
-  return im.face.empty() ? ClosestPoints::Hit{} : original.point_at(im.face[i], im.barycentric[i]);
+// Per sample, where it was taken on the original surface (face −1 if unknown): a close start
+// for exact closest-point queries near the sample, however far the fit has moved it since.
+// Fixed for a level (zippering and the fit move positions, not the sample's source).
+std::vector<ClosestPoints::Hit> sample_sources(const ClosestPoints& original, const GeometryImage& im) {
+  std::vector<ClosestPoints::Hit> out(im.group.size());
+  if (im.face.empty()) return out;
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = original.point_at(im.face[i], im.barycentric[i]);
+  return out;
 }
 
 // Of n candidate hits, the one nearest to q (face −1 if none is known).
@@ -180,8 +184,8 @@ ClosestPoints::Hit nearest(const ClosestPoints::Hit* h, int n, const Vec3d& q) {
 // on the original.
 std::vector<FitPoint> closest_points(const ClosestPoints& original, const std::vector<Vec3d>& pts,
                                      const std::vector<double>& area, const std::vector<int>& pts_face,
-                                     const std::vector<Vec3d>& original_normals, const GeometryImage& im,
-                                     const Remesh& r) {
+                                     const std::vector<Vec3d>& original_normals,
+                                     const std::vector<ClosestPoints::Hit>& source, const Remesh& r) {
   const ClosestPoints remesh(r.mesh);
   const std::size_t no = pts.size();
   const int nf = r.mesh.num_faces();
@@ -193,8 +197,7 @@ std::vector<FitPoint> closest_points(const ClosestPoints& original, const std::v
     const Vec3d a = r.mesh.positions[F[0]], b = r.mesh.positions[F[1]], c = r.mesh.positions[F[2]];
     const Vec3d centroid = (a + b + c) / 3.0;
     const auto& fs = r.face_samples[f];
-    const ClosestPoints::Hit s[3] = {source_of(original, im, fs[0]), source_of(original, im, fs[1]),
-                                     source_of(original, im, fs[2])};
+    const ClosestPoints::Hit s[3] = {source[fs[0]], source[fs[1]], source[fs[2]]};
     const ClosestPoints::Hit h = original.closest(centroid, nearest(s, 3, centroid));
     hit_face[f] = h.face;
     out[no + f] = {f, {1.0 / 3, 1.0 / 3, 1.0 / 3}, h.point, isochart::triangle_area(a, b, c),
@@ -443,7 +446,8 @@ void solve_plane(const std::vector<FitPoint>& pts, const std::vector<Vec3d>& gro
 // are shared, so a seam block's diagonal can be an edge of the neighbouring chart, and using
 // it twice would make it non-manifold. With `interior_only`, blocks touching a zippered sample
 // keep their diagonal.
-void choose_diagonals(const ClosestPoints& original, const Remesh& r, bool interior_only, GeometryImage& im) {
+void choose_diagonals(const ClosestPoints& original, const std::vector<ClosestPoints::Hit>& source,
+                      const Remesh& r, bool interior_only, GeometryImage& im) {
   const int W = im.width, H = im.height;
   std::vector<int> group_size(im.num_groups, 0);
   for (int g : im.group)
@@ -473,8 +477,7 @@ void choose_diagonals(const ClosestPoints& original, const Remesh& r, bool inter
       if (interior_only && (group_size[g[0]] > 1 || group_size[g[1]] > 1 || group_size[g[2]] > 1 || group_size[g[3]] > 1))
         continue;
       const Vec3d p[4] = {im.positions[c[0]], im.positions[c[1]], im.positions[c[2]], im.positions[c[3]]};
-      const ClosestPoints::Hit s[4] = {source_of(original, im, c[0]), source_of(original, im, c[1]),
-                                       source_of(original, im, c[2]), source_of(original, im, c[3])};
+      const ClosestPoints::Hit s[4] = {source[c[0]], source[c[1]], source[c[2]], source[c[3]]};
       auto d2 = [&](const Vec3d& q) { return squared_norm(original.closest(q, nearest(s, 4, q)).point - q); };
       const double e02 = d2((p[0] + p[2]) * 0.5) + d2((p[0] + p[1] + p[2]) / 3.0) + d2((p[0] + p[2] + p[3]) / 3.0);
       const double e13 = d2((p[1] + p[3]) * 0.5) + d2((p[0] + p[1] + p[3]) / 3.0) + d2((p[1] + p[2] + p[3]) / 3.0);
@@ -561,6 +564,7 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
     std::vector<int> pts_face;
     surface_points(*a.mesh, texel_area, pts, area, pts_face);
     const std::vector<Vec3d>& original_normals = surface.face_normals;
+    const std::vector<ClosestPoints::Hit> source = sample_sources(original, im);
     // Fitted diagonals may not take the remesh further from the input's topology, nor change
     // its figures at the same distance; they may bring it closer (at coarse levels, where the
     // zippered seams are short, the old diagonals sometimes used an edge twice). Should the
@@ -577,7 +581,7 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
       const GeometryImage::Diagonals kept = im.block_diagonal;
       for (;;) {
         im.block_diagonal = kept;
-        choose_diagonals(original, r, interior_only, im);
+        choose_diagonals(original, source, r, interior_only, im);
         Remesh next = reconstruct(im);
         const TopologyCheck after = check_topology(next.mesh);
         if (distance(after) < distance(before) ||
@@ -596,7 +600,7 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
       isochart::report(progress, isochart::Stage::Optimization,
                        static_cast<double>(o.optimize_iterations + it) / passes);
       if (diagonals) pick_diagonals();
-      solve_plane(closest_points(original, pts, area, pts_face, original_normals, im, r), group_anchor,
+      solve_plane(closest_points(original, pts, area, pts_face, original_normals, source, r), group_anchor,
                   plane_lambda, max_move, im, r);
     }
     if (diagonals && o.geometric_iterations > 0) pick_diagonals();
