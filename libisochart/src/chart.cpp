@@ -383,6 +383,39 @@ double multiply_covered_fraction(const std::vector<Face>& tris, const std::vecto
   return once ? static_cast<double>(more) / once : 0.0;
 }
 
+double linf_lower_bound(const ChartGeometry& g, const Topology& topo) {
+  const int nv = g.num_vertices();
+  std::vector<double> angle_sum(nv, 0.0);
+  std::vector<int> corners(nv, 0);
+  std::vector<char> skip(nv, 0);
+  for (const Face& t : g.tris)
+    for (int k = 0; k < 3; ++k) {
+      const int v = t[k];
+      const Vec3d a = g.positions[t[(k + 1) % 3]] - g.positions[v],
+                  b = g.positions[t[(k + 2) % 3]] - g.positions[v];
+      const double c = norm(cross(a, b));
+      if (!(c > 0)) {
+        for (int j = 0; j < 3; ++j) skip[t[j]] = 1;
+        continue;
+      }
+      angle_sum[v] += std::atan2(c, dot(a, b));
+      ++corners[v];
+    }
+  double need = 0;  // the largest mean angle change per corner, halved
+  for (int v = 0; v < nv; ++v)
+    if (corners[v] > 0 && !skip[v] && topo.is_referenced(v) && !topo.is_boundary_vertex(v))
+      need = std::max(need, std::abs(2 * M_PI - angle_sum[v]) / (2 * corners[v]));
+  if (need >= M_PI / 2) return std::numeric_limits<double>::infinity();
+  const double s = std::sin(need);
+  return std::sqrt((1 + s) / (1 - s));
+}
+
+bool linf_bound_unreachable(const ChartGeometry& g, const Topology& topo, double max_linf) {
+  // The margin over the acceptance slack keeps rounding in the angle sums on the safe side.
+  return max_linf < kLinfDefectTestBelow &&
+         linf_lower_bound(g, topo) > max_linf * kStretchBoundSlack * (1 + 1e-6);
+}
+
 namespace {
 
 // L2 stretch over all but the worst `trim` fraction of the area: tells a globally stretched
@@ -488,6 +521,10 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
   // Every start of this chart is untangled, optimized and (for LSCM) pinned on one topology.
   const Topology own = o.topology ? Topology() : Topology(g.tris, g.num_vertices());
   const Topology& topo = o.topology ? *o.topology : own;
+  // A chart whose angle defects alone exceed the Linf bound fails whatever the layout: its
+  // starts are only measured. With a tight bound (--max-linf near 1) most charts and merge
+  // attempts are of this kind, and each optimization and LSCM solve was spent for nothing.
+  const bool infeasible = linf_bound_unreachable(g, topo, o.max_linf);
   auto attempt = [&](std::vector<Vec2d> uv, const char* method) {
     ChartParam p;
     p.method = method;
@@ -504,18 +541,19 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& iso_uv
     // Optimization lowers L2 by a few tenths at most: far worse starts are not worth it. Nor
     // are starts folded onto themselves on a large scale (merged charts whose halves overlap):
     // vertex moves inside 1-ring kernels do not undo that.
-    const bool worth = p.initial_l2 <= kHopelessL2 * o.max_l2 &&
-                       (o.max_start_overlap >= 1 ||
-                        multiply_covered_fraction(g.tris, p.uv,
-                                                  std::min(kOverlapCells, kOverlapCellsPerTriangle * g.num_faces())) <=
-                            o.max_start_overlap);
+    const bool worth =
+        !infeasible && p.initial_l2 <= kHopelessL2 * o.max_l2 &&
+        (o.max_start_overlap >= 1 ||
+         multiply_covered_fraction(g.tris, p.uv,
+                                   std::min(kOverlapCells, kOverlapCellsPerTriangle * g.num_faces())) <=
+             o.max_start_overlap);
     if (worth) optimize_stretch(g.positions, g.tris, p.uv, opt, topo);
     p.optimize_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     seconds += p.optimize_seconds;
     evaluate(g, p, o, &topo);
     return p;
   };
-  bool try_lscm = o.lscm_fallback;
+  bool try_lscm = o.lscm_fallback && !infeasible;
   if (!iso_uv.empty()) {
     best = attempt(iso_uv, "isomap");
     if (best.accepted) return best;

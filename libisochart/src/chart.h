@@ -102,6 +102,23 @@ struct ChartParam {
 /// self-overlap and meets both bounds. Returns the best attempt.
 ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& isomap_uv, const ParamOptions& o);
 
+/// A lower bound on the Linf stretch of every parameterization of g without flips or overlaps
+/// (1 when none is known). Such a layout's angles around an interior vertex sum to 2π, so a
+/// vertex whose 3D angles sum to Θ needs its k corners' angles changed by |2π − Θ| in all; a
+/// triangle mapped with singular values σ1 ≥ σ2 changes an angle by at most
+/// 2·asin((r − 1)/(r + 1)), r = σ1/σ2, and its Linf is at least √r. Vertices on g's boundary
+/// (by `topo`) or next to a zero-area face are left out.
+double linf_lower_bound(const ChartGeometry& g, const Topology& topo);
+
+/// Linf bounds from which linf_bound_unreachable no longer tests: beyond, the bound takes angle
+/// changes of over 73° per corner on average, which no vertex of a usual mesh needs, so the
+/// test would only cost time.
+constexpr double kLinfDefectTestBelow = 2.0;
+
+/// True when linf_lower_bound shows that no layout of g meets `max_linf` (up to rounding);
+/// always false from kLinfDefectTestBelow on.
+bool linf_bound_unreachable(const ChartGeometry& g, const Topology& topo, double max_linf);
+
 /// The first two embedding coordinates per vertex (empty when the embedding has fewer than two).
 std::vector<Vec2d> isomap_uv(const Embedding& e);
 

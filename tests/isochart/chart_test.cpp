@@ -134,3 +134,61 @@ TEST_CASE("a lone sliver triangle (height 1e-10 of its length) is laid out with 
   CHECK(signed_area(p.uv[0], p.uv[1], p.uv[2]) > 0);
   CHECK(signed_area(p.uv[0], p.uv[1], p.uv[2]) == Approx(0.5e-10).epsilon(1e-3));
 }
+
+namespace {
+
+// A cone of k triangles around an apex at height h over a unit ring; the ring is the boundary.
+ChartGeometry cone(int k, double h) {
+  ChartGeometry g;
+  g.positions.push_back({0, 0, h});
+  for (int i = 0; i < k; ++i)
+    g.positions.push_back({std::cos(2 * M_PI * i / k), std::sin(2 * M_PI * i / k), 0});
+  for (int i = 0; i < k; ++i) {
+    g.tris.push_back({0, 1 + i, 1 + (i + 1) % k});
+    g.faces.push_back(i);
+  }
+  for (int v = 0; v <= k; ++v) g.vertex_parent.push_back(v);
+  return g;
+}
+
+}  // namespace
+
+TEST_CASE("the Linf lower bound from angle defects holds and spares hopeless charts", "[chart]") {
+  const int k = 8;
+  const ChartGeometry flat = cone(k, 0);
+  CHECK(linf_lower_bound(flat, Topology(flat.tris, flat.num_vertices())) == Approx(1.0).margin(1e-12));
+
+  const ChartGeometry g = cone(k, 1.0);
+  const Topology topo(g.tris, g.num_vertices());
+  const double bound = linf_lower_bound(g, topo);
+  // The apex's angles sum to well under 2π: a layout must open them up.
+  CHECK(bound > 1.1);
+  CHECK(bound < 2);
+  // The symmetric layout (a regular octagon around its centre) and the optimized one both
+  // respect it.
+  std::vector<Vec2d> regular;
+  for (int v = 0; v < g.num_vertices(); ++v) regular.push_back({g.positions[v].x, g.positions[v].y});
+  CHECK(measure_stretch(g.positions, g.tris, regular).linf >= bound);
+  ParamOptions loose;
+  loose.max_l2 = 10;
+  loose.max_linf = 50;
+  const ChartParam p = parameterize(g, regular, loose);
+  REQUIRE(p.accepted);
+  CHECK(p.linf >= bound);
+
+  // Below the bound no layout can pass: the start (here stretched along x) is measured,
+  // neither optimized nor replaced by LSCM.
+  std::vector<Vec2d> stretched = regular;
+  for (Vec2d& x : stretched) x.x *= 1.3;
+  CHECK(linf_bound_unreachable(g, topo, 0.99 * bound));
+  CHECK_FALSE(linf_bound_unreachable(g, topo, 1.01 * bound));
+  ParamOptions tight = loose;
+  tight.max_linf = 0.99 * bound;
+  const ChartParam q = parameterize(g, stretched, tight);
+  CHECK_FALSE(q.accepted);
+  CHECK(q.method == "isomap");
+  CHECK(q.uv == stretched);
+  // Just above it the chart is still worked on (and the layout moves).
+  tight.max_linf = 1.01 * bound;
+  CHECK(parameterize(g, stretched, tight).uv != stretched);
+}
