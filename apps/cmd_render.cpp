@@ -141,6 +141,7 @@ void run_render(const Context& ctx, const RenderArgs& a) {
       // What synth and atlas outputs carry (an OBJ's MTL map_Kd, a glb's base colour) was
       // drawn untextured unless named again with --texture.
       const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
+      if (!t.problem.empty()) ctx.warn(a.input, t.problem + "; drawn shaded");
       try {
         if (!t.file.empty()) {
           texture = isochart::read_image(t.file);

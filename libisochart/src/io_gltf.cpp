@@ -1,9 +1,11 @@
 // glTF 2.0 (.gltf / .glb) through tinygltf: reader (triangles, strips and fans of every mesh
 // reached from the default scene, node transforms applied) and glb writer.
+#include <sys/stat.h>
 #include <tiny_gltf.h>
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -564,6 +566,13 @@ void weld_equal_positions(RawMesh& raw) {
 }
 
 namespace {
+// Whether a referenced file exists, by its status alone: tinygltf's own check opens the file,
+// which waits forever on a FIFO.
+bool path_exists(const std::string& path, void*) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0;
+}
+
 // External buffers are read like every input (a directory named as a buffer made tinygltf's own
 // reader throw bad_alloc), and count as inputs of the run.
 bool read_buffer_file(std::vector<unsigned char>* out, std::string* err, const std::string& path, void*) {
@@ -581,8 +590,8 @@ bool read_buffer_file(std::vector<unsigned char>* out, std::string* err, const s
 // with `loader`, whose image loader the caller has set. Exceptions of tinygltf pass through.
 bool parse_gltf(tinygltf::TinyGLTF& loader, const std::string& path, std::string_view data, bool binary,
                 tinygltf::Model& model, std::string& err) {
-  loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_buffer_file,
-                         &tinygltf::WriteWholeFile, nullptr});
+  loader.SetFsCallbacks(
+      {&path_exists, &tinygltf::ExpandFilePath, &read_buffer_file, &tinygltf::WriteWholeFile, nullptr});
   std::string warn;
   const auto slash = path.find_last_of('/');
   const std::string base_dir = slash == std::string::npos ? "." : path.substr(0, slash);
@@ -792,15 +801,43 @@ MeshTexture gltf_texture(const std::string& path, std::string_view data, bool bi
   if (!ok || model.materials.empty()) return {};
   const int tex = model.materials[0].pbrMetallicRoughness.baseColorTexture.index;
   if (tex < 0 || tex >= static_cast<int>(model.textures.size())) return {};
-  const int source = model.textures[tex].source;
-  const auto found = images.find(source);
-  if (found == images.end() || found->second.empty()) return {};
   MeshTexture t;
+  const int source = model.textures[tex].source;
+  if (source < 0 || source >= static_cast<int>(model.images.size())) {
+    t.problem = "its base-colour texture names no image";
+    return t;
+  }
+  // An image file is handed over by name, so reading it says what is wrong with it.
+  const std::string& uri = model.images[source].uri;
+  if (!uri.empty() && uri.compare(0, 5, "data:") != 0) {
+    std::string name;
+    for (std::size_t i = 0; i < uri.size(); ++i) {  // %XX escapes, as URIs in glTF may carry
+      if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+          std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+        name += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+        i += 2;
+      } else {
+        name += uri[i];
+      }
+    }
+    const auto slash = path.find_last_of('/');
+    t.file = name.front() == '/' || slash == std::string::npos ? name : path.substr(0, slash + 1) + name;
+    return t;
+  }
+  const auto found = images.find(source);
+  if (found == images.end() || found->second.empty()) {
+    t.problem = "its base-colour image is empty or cannot be decoded";
+    return t;
+  }
   t.bytes = std::move(found->second);
   const bool png = t.bytes.size() >= 4 && t.bytes.compare(0, 4, "\x89PNG") == 0;
   const bool jpeg = t.bytes.size() >= 2 && static_cast<unsigned char>(t.bytes[0]) == 0xFF &&
                     static_cast<unsigned char>(t.bytes[1]) == 0xD8;
-  if (!png && !jpeg) return {};  // glTF allows only PNG and JPEG (extensions aside)
+  if (!png && !jpeg) {  // glTF allows only PNG and JPEG (extensions aside)
+    t.bytes.clear();
+    t.problem = "its base-colour image is not a PNG or JPEG image";
+    return t;
+  }
   t.extension = png ? ".png" : ".jpg";
   return t;
 }

@@ -392,13 +392,17 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
       if (!libraries.empty()) break;  // both known: the rest is geometry
     }
   }
+  std::string unreadable;
   for (const std::string& lib : libraries) {
     const std::string mtl_path = lib.front() == '/' ? lib : directory_of(path) + lib;
     std::string mtl;
     try {
       mtl = read_file(mtl_path);
-    } catch (const InputError&) {
-      continue;  // a missing MTL only loses the material, as in every viewer
+    } catch (const InputError& e) {
+      // A missing MTL only loses the material, as in every viewer, but is said.
+      if (unreadable.empty())
+        unreadable = std::string("its material library cannot be read (") + e.what() + ")";
+      continue;
     }
     bool in_material = false, seen_material = false;
     for (std::size_t at = 0; at < mtl.size();) {
@@ -421,7 +425,9 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
       }
     }
   }
-  return {};
+  MeshTexture none;
+  none.problem = unreadable;
+  return none;
 }
 
 }  // namespace isochart::io_detail

@@ -36,8 +36,24 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
   if (colored) h.remove_prefix(1);
   const bool with_normals = !h.empty() && h[0] == 'N';
   if (with_normals) h.remove_prefix(1);
-  if (!h.empty() && (h[0] == '4' || h[0] == 'n') && h.substr(1).find("OFF") != std::string_view::npos)
+  if (!h.empty() && h[0] == '4' && h.substr(1).find("OFF") != std::string_view::npos)
     fail_at_line(path, lines.line_number(), "only 3D OFF files are supported (header " + quoted(tok) + ")");
+  // nOFF gives the space dimension before the counts; a 3-D one is a plain OFF.
+  if (h == "nOFF") {
+    const std::string header(tok);
+    std::string_view dim;
+    if (!next_token(rest, dim)) {
+      if (!next_content(line)) throw InputError(path, "file ends after the nOFF header (no dimension)");
+      rest = line;
+      next_token(rest, dim);
+    }
+    long long n = 0;
+    if (!parse_int(dim, n) || n != 3)
+      fail_at_line(path, lines.line_number(),
+                   "only 3D OFF files are supported (header " + quoted(header) + " with dimension " +
+                       quoted(dim) + ")");
+    h = "OFF";
+  }
   if (h != "OFF")
     fail_at_line(path, lines.line_number(),
                  "expected an OFF header ('OFF', 'COFF', 'NOFF', ...), found " + quoted(tok));

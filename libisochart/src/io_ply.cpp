@@ -180,13 +180,39 @@ class RecordReader {
   /// A list length: non-negative and small enough for the rest of the file.
   long long read_count(Type t, int value_bytes) {
     const double c = read(t);
-    if (!(c >= 0) || c != std::floor(c)) fail("invalid list length " + std::to_string(c));
+    if (!(c >= 0) || c != std::floor(c)) {
+      char text[40];
+      std::snprintf(text, sizeof text, "%.17g", c);
+      fail(std::string("invalid list length ") + text);
+    }
     const auto n = static_cast<long long>(c);
     const long long left = ascii_ ? static_cast<long long>(rest_.size()) / 2 + 1 : (end_ - p_) / value_bytes;
     if (n > left)
       fail("list of " + std::to_string(n) + " values runs past the end of the " +
            std::string(ascii_ ? "line" : "file (truncated)"));
     return n;
+  }
+
+  /// What follows the last record that is not blank (ASCII) or padding (binary zeros and
+  /// white space): "" when nothing, else a description of it ending in "follow(s)".
+  std::string trailing() {
+    if (ascii_) {
+      long long extra = 0;
+      long long first = 0;
+      std::string_view line;
+      while (lines_.next(line))
+        if (line.find_first_not_of(" \t\r\v\f") != std::string_view::npos && extra++ == 0)
+          first = line_offset_ + lines_.line_number();
+      if (extra == 0) return "";
+      return extra > 1 ? std::to_string(extra) + " more lines of data from line " + std::to_string(first) +
+                             " follow"
+                       : "a line of data (line " + std::to_string(first) + ") follows";
+    }
+    const auto padding = [](unsigned char c) {
+      return c == 0 || c == ' ' || c == '\n' || c == '\r' || c == '\t';
+    };
+    if (std::all_of(p_, end_, padding)) return "";
+    return std::to_string(end_ - p_) + " more bytes of data follow";
   }
 
   [[noreturn]] void fail(const std::string& message) const {
@@ -440,6 +466,13 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
       }
     }
   }
+  // Data past the declared records means the counts are wrong: they were read as far as the
+  // header said and the rest was dropped without a word.
+  const std::string extra = in.trailing();
+  if (!extra.empty())
+    throw InputError(path, extra + " the last element the header declares (" + elements.back().name + " " +
+                               std::to_string(elements.back().count) +
+                               "); the header's counts do not match the file");
   if (vertex_uv && !corner_uv) raw.polygon_uvs = raw.polygons;
   // Float colours are meant to be in [0, 1], but some writers store 8-bit values as floats.
   // Taken as they are, the signal was 255 times too strong and a written PLY saturated.

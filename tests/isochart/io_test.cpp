@@ -366,6 +366,17 @@ TEST_CASE("OFF: header variants, comments, polygons and colours", "[io]") {
   }
 }
 
+TEST_CASE("OFF: nOFF of dimension 3 is a plain OFF; other dimensions are refused", "[io]") {
+  TempDir d;
+  const std::string body = "4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n";
+  CHECK(read_raw_mesh(d.write("a.off", "nOFF\n3\n" + body)).polygons.size() == 2);
+  CHECK(read_raw_mesh(d.write("b.off", "nOFF 3 " + body)).positions.size() == 4);
+  CHECK(load_error(d.write("c.off", "nOFF\n4\n" + body)) ==
+        "line 2: only 3D OFF files are supported (header 'nOFF' with dimension '4')");
+  CHECK_THAT(load_error(d.write("d.off", "4OFF\n" + body)),
+             Catch::Contains("only 3D OFF files are supported"));
+}
+
 TEST_CASE("OFF: errors name the line", "[io]") {
   TempDir d;
   auto err = [&](const std::string& text) { return load_error(d.write("bad.off", text)); };
@@ -552,6 +563,18 @@ TEST_CASE("PLY: errors name the line or the element", "[io]") {
   CHECK(load_error(d.write("a5.ply", ascii_head + "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n")) ==
         "vertex 1 has a non-finite coordinate (1, nan, 0)");
   CHECK_THAT(load_error(d.write("noply.ply", "solid stl\n")), Catch::Contains("not a PLY file"));
+  // Counts smaller than the data: the rest was dropped without a word. Zero padding is not data.
+  CHECK(load_error(d.write("more.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n\n")) ==
+        "a line of data (line 14) follows the last element the header declares (face 1); the header's counts "
+        "do not match the file");
+  CHECK_THAT(
+      load_error(d.write("more2.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 1\n3 1 2 0\n")),
+      Catch::StartsWith("2 more lines of data from line 14 follow"));
+  CHECK_THAT(load_error(d.write("more.bin.ply", full + std::string(7, '\x01'))),
+             Catch::StartsWith("7 more bytes of data follow the last element"));
+  CHECK(read_raw_mesh(d.write("pad.bin.ply", full + std::string(20, '\0'))).polygons.size() == 4);
+  CHECK(load_error(d.write("neg.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n-3 0 1 2\n")) ==
+        "line 13: face 0: invalid list length -3");
 }
 
 // ---- glTF ----------------------------------------------------------------------------------
@@ -666,6 +689,43 @@ TEST_CASE("glTF: primitives, modes, index types and transforms", "[io]") {
   CHECK_THAT(load_error(d.file("external.gltf")), Catch::StartsWith("invalid glTF"));
   fs::create_directory(d.file("s.bin"));  // tinygltf's own reader threw bad_alloc on this
   CHECK_THAT(load_error(d.file("external.gltf")), Catch::StartsWith("invalid glTF") && Catch::Contains("is a directory"));
+  // tinygltf's check that the file exists opened it, and waited forever on a FIFO.
+  fs::remove(d.file("s.bin"));
+  REQUIRE(::mkfifo(d.file("s.bin").c_str(), 0600) == 0);
+  CHECK_THAT(load_error(d.file("external.gltf")),
+             Catch::StartsWith("invalid glTF") && Catch::Contains("is not a regular file"));
+}
+
+TEST_CASE("glTF and OBJ: a texture named but unusable is said, by file or by reason", "[io]") {
+  TempDir d;
+  const GltfSample s = gltf_sample();
+  nlohmann::json doc = s.doc;
+  doc["buffers"] = {{{"byteLength", s.bin.size()}, {"uri", "s.bin"}}};
+  doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}};
+  doc["textures"] = {{{"source", 0}}};
+  d.write("s.bin", s.bin);
+  // An image file is handed over by name (reading it then says what is wrong), also when it
+  // is missing or a FIFO, which the mesh reader must not wait on.
+  doc["images"] = {{{"uri", "my%20tex.png"}}};
+  MeshTexture t = find_mesh_texture(d.write("file.gltf", doc.dump()));
+  CHECK(t.file == d.file("my tex.png"));
+  CHECK(t.problem.empty());
+  REQUIRE(::mkfifo(d.file("my tex.png").c_str(), 0600) == 0);
+  CHECK(read_raw_mesh(d.file("file.gltf")).polygons.size() == 6);
+  CHECK(find_mesh_texture(d.file("file.gltf")).file == d.file("my tex.png"));
+  // Embedded bytes that are no PNG or JPEG, and a texture without an image.
+  doc["images"] = {{{"uri", "data:image/png;base64,AAAA"}}};
+  t = find_mesh_texture(d.write("bad.gltf", doc.dump()));
+  CHECK(t.bytes.empty());
+  CHECK(t.problem == "its base-colour image is not a PNG or JPEG image");
+  doc["textures"] = {{{"sampler", 0}}};
+  doc["samplers"] = {nlohmann::json::object()};
+  CHECK(find_mesh_texture(d.write("none.gltf", doc.dump())).problem ==
+        "its base-colour texture names no image");
+  // An OBJ whose material library is missing.
+  t = find_mesh_texture(d.write("m.obj", "mtllib gone.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
+  CHECK(t.file.empty());
+  CHECK_THAT(t.problem, Catch::StartsWith("its material library cannot be read"));
 }
 
 TEST_CASE("glTF: a chain of nodes deeper than the call stack loads", "[io]") {
