@@ -121,12 +121,13 @@ bool is_integer_text(std::string_view token) {
          std::all_of(token.begin(), token.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
-double expect_number(std::string_view& rest, const std::string& path, long long line, const char* what) {
+double expect_number(std::string_view& rest, const std::string& path, long long line, const char* what,
+                     const char* name) {
   std::string_view tok;
   if (!next_token(rest, tok)) fail_at_line(path, line, std::string("expected ") + what);
   double v = 0;
   if (!parse_double(tok, v)) fail_at_line(path, line, quoted(tok) + " is not a number");
-  if (!std::isfinite(v)) fail_at_line(path, line, std::string(what) + " " + not_finite(tok));
+  if (!std::isfinite(v)) fail_at_line(path, line, std::string(name) + " " + not_finite(tok));
   return v;
 }
 

@@ -112,8 +112,10 @@ bool parse_int(std::string_view token, long long& value);
 /// so that readers can call it out of range rather than malformed.
 bool is_integer_text(std::string_view token);
 
-/// Parses the next token on a line as a finite number, or throws naming the line and `what`.
-double expect_number(std::string_view& rest, const std::string& path, long long line, const char* what);
+/// Parses the next token on a line as a finite number, or throws naming the line and `what`
+/// (what was expected, when the line ends) or `name` (the value, when it is not finite).
+double expect_number(std::string_view& rest, const std::string& path, long long line, const char* what,
+                     const char* name);
 
 /// Appends the shortest text that reads back as exactly `v` (std::to_chars).
 void append_number(std::string& out, double v);

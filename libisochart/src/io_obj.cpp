@@ -117,7 +117,7 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
       }
     } else if (key == "vt") {
       Vec2d uv;
-      uv.x = expect_number(rest, path, ln, "texture coordinate after 'vt'");
+      uv.x = expect_number(rest, path, ln, "texture coordinate after 'vt'", "texture coordinate");
       std::string_view tok;
       if (next_token(rest, tok) && tok[0] != '#') {
         if (!parse_double(tok, uv.y)) fail_at_line(path, ln, quoted(tok) + " is not a number");
@@ -126,7 +126,8 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
       raw.uvs.push_back(uv);
     } else if (key == "vn") {
       Vec3d nrm;
-      for (int i = 0; i < 3; ++i) nrm[i] = expect_number(rest, path, ln, "3 coordinates after 'vn'");
+      for (int i = 0; i < 3; ++i)
+        nrm[i] = expect_number(rest, path, ln, "3 coordinates after 'vn'", "normal coordinate");
       normals_in.push_back(nrm);
     } else if (key == "f" || key == "fo") {
       poly.clear();

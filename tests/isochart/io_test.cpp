@@ -289,6 +289,7 @@ TEST_CASE("OBJ: parse errors name the line", "[io]") {
   CHECK(err("v 1 2 1e999\n") == "line 4: coordinate '1e999' is out of range (beyond 1.8e308)");
   CHECK(err("v 1 2 -1e999\n") == "line 4: coordinate '-1e999' is out of range (beyond 1.8e308)");
   CHECK(err("v 1 2 inf\n") == "line 4: coordinate 'inf' is not finite");
+  CHECK(err("vn 0 nan 1\n") == "line 4: normal coordinate 'nan' is not finite");
   CHECK(err("vt 0.5 1e400\n") == "line 4: texture coordinate '1e400' is out of range (beyond 1.8e308)");
   CHECK(err("f 1 2\n") == "line 4: face has 2 corners; a face needs at least 3");
   CHECK(err("f 0 1 2\n") == "line 4: vertex index 0 is invalid (OBJ indices start at 1)");
