@@ -296,6 +296,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     j["resolution"] = {s.width, s.height};
     j["charts"] = s.charts;
     j["empty_charts"] = s.empty_charts;
+    j["lost_charts"] = s.lost_charts;
     j["enlarged_charts"] = s.enlarged_charts;
     j["defined_samples"] = s.defined_samples;
     j["removed_samples"] = s.removed_samples;

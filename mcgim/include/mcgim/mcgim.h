@@ -77,6 +77,9 @@ struct LevelStats {
   int width = 0, height = 0;
   int charts = 0;
   int empty_charts = 0;       ///< charts left without a sample at this resolution (contracted)
+  /// Charts part of whose surface is over 3 texels from the remesh (contracted by the zipper:
+  /// too thin or small for their samples at this resolution); topology_warning names them.
+  int lost_charts = 0;
   /// Charts packed larger than their surface area asks for: when a coarse level's remesh
   /// loses the input's topology (charts too small for a triangle of samples collapse), the
   /// level is rebuilt with its sparsest charts enlarged (×1.5 per attempt, up to 13 times,
@@ -126,8 +129,9 @@ Level build_level(const isochart::Mesh& atlas, const LevelOptions& options = {},
                   const isochart::Progress& progress = {});
 
 /// What is wrong with a level's remesh for a user, in one line ("WxH level does not keep the
-/// input's topology (...)" or "WxH level has N non-manifold vertices (...)"); empty when it
-/// keeps the input's Euler characteristic and boundary loops and is manifold.
+/// input's topology (...)", "WxH level has N non-manifold vertices (...)" or "WxH level lost
+/// part of the surface of N charts (...)"); empty when it keeps the input's Euler
+/// characteristic and boundary loops, is manifold and lost no chart.
 std::string topology_warning(const LevelStats& stats);
 
 /// \throw isochart::InputError("", "WxH level: no 2x2 block of defined samples, ...") when the
