@@ -179,14 +179,19 @@ class GltfReader {
     }
   }
 
-  AccessorView view(int index, const std::string& what, std::initializer_list<int> types,
-                    bool need_data) const {
+  // `components`: the component types allowed (any when empty), checked before the data so
+  // that a wrong one is not reported as a short buffer.
+  AccessorView view(int index, const std::string& what, std::initializer_list<int> types, bool need_data,
+                    std::initializer_list<int> components = {}) const {
     if (index < 0 || index >= static_cast<int>(model_.accessors.size()))
       fail(what + ": accessor " + std::to_string(index) + " does not exist");
     const tinygltf::Accessor& a = model_.accessors[index];
     const std::string name = what + " (accessor " + std::to_string(index) + ")";
     if (a.sparse.isSparse) fail(name + " is sparse, which is not supported");
     if (std::find(types.begin(), types.end(), a.type) == types.end()) fail(name + " has the wrong type");
+    if (components.size() > 0 &&
+        std::find(components.begin(), components.end(), a.componentType) == components.end())
+      fail(name + " has a non-integer component type");
     AccessorView v;
     v.count = a.count;
     v.component_type = a.componentType;
@@ -302,11 +307,10 @@ class GltfReader {
       // Corner indices of the primitive, then its triangles.
       std::vector<std::uint32_t> idx;
       if (p.indices >= 0) {
-        const AccessorView iv = view(p.indices, what + " indices", {TINYGLTF_TYPE_SCALAR}, true);
-        if (iv.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
-            iv.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-            iv.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
-          fail(what + " indices have a non-integer component type");
+        const AccessorView iv =
+            view(p.indices, what + " indices", {TINYGLTF_TYPE_SCALAR}, true,
+                 {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
         idx.resize(iv.count);
         for (std::size_t i = 0; i < iv.count; ++i) {
           const double x = iv.get(i, 0);

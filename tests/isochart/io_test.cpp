@@ -776,6 +776,11 @@ TEST_CASE("glTF: malformed files are clear errors", "[io]") {
   s.doc["accessors"][0]["count"] = 400;
   CHECK_THAT(load_error(d.write("count.glb", glb_of(s))),
              Catch::Contains("mesh 0 primitive 0 POSITION (accessor 0) runs past the end of its bufferView"));
+  // Float indices over a bufferView sized for ushorts: the type is the problem, not the size.
+  s = gltf_sample();
+  s.doc["accessors"][3]["componentType"] = 5126;
+  CHECK_THAT(load_error(d.write("floatidx.glb", glb_of(s))),
+             Catch::Contains("mesh 0 primitive 0 indices (accessor 3) has a non-integer component type"));
   s = gltf_sample();
   s.bin[128] = 9;  // first ushort index
   CHECK_THAT(load_error(d.write("index.glb", glb_of(s))),
