@@ -800,9 +800,7 @@ class Builder {
     if (!folded && !detail::is_sock(g, topo, dist)) return false;
     detail::ChartGeometry sg = g;
     if (!detail::cut_seam(sg, topo, &dist)) return false;
-    if (po.max_linf < detail::kLinfDefectTestBelow &&
-        detail::linf_bound_unreachable(sg, Topology(sg.tris, sg.num_vertices()), po.max_linf))
-      return false;  // spares the slit chart's embedding
+    if (detail::linf_bound_unreachable(sg, nullptr, po.max_linf)) return false;  // spares its embedding
     const Embedding se = embed(sg, out.times, landmarks_for(sg, g.faces));
     detail::ChartParam q = detail::parameterize(sg, detail::isomap_uv(se), po);
     out.times.optimization += q.optimize_seconds;

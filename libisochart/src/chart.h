@@ -110,14 +110,10 @@ ChartParam parameterize(const ChartGeometry& g, const std::vector<Vec2d>& isomap
 /// (by `topo`) or next to a zero-area face are left out.
 double linf_lower_bound(const ChartGeometry& g, const Topology& topo);
 
-/// Linf bounds from which linf_bound_unreachable no longer tests: beyond, the bound takes angle
-/// changes of over 73° per corner on average, which no vertex of a usual mesh needs, so the
-/// test would only cost time.
-constexpr double kLinfDefectTestBelow = 2.0;
-
 /// True when linf_lower_bound shows that no layout of g meets `max_linf` (up to rounding);
-/// always false from kLinfDefectTestBelow on.
-bool linf_bound_unreachable(const ChartGeometry& g, const Topology& topo, double max_linf);
+/// always false from kLinfDefectTestBelow on. `topo` is g's topology, or null to build it (only
+/// when the test runs).
+bool linf_bound_unreachable(const ChartGeometry& g, const Topology* topo, double max_linf);
 
 /// The first two embedding coordinates per vertex (empty when the embedding has fewer than two).
 std::vector<Vec2d> isomap_uv(const Embedding& e);

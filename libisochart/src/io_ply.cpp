@@ -181,9 +181,9 @@ class RecordReader {
   long long read_count(Type t, int value_bytes) {
     const double c = read(t);
     if (!(c >= 0) || c != std::floor(c)) {
-      char text[40];
-      std::snprintf(text, sizeof text, "%.17g", c);
-      fail(std::string("invalid list length ") + text);
+      std::string text = "invalid list length ";
+      append_number(text, c);
+      fail(text);
     }
     const auto n = static_cast<long long>(c);
     const long long left = ascii_ ? static_cast<long long>(rest_.size()) / 2 + 1 : (end_ - p_) / value_bytes;

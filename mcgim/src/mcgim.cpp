@@ -76,11 +76,9 @@ bool shift_layout(detail::Placement& pl, isochart::Vec2d shift) {
 constexpr double kLostTexels = 3.0;
 constexpr long long kCoverageProbes = 20000;
 
-// Marks in `lost` the charts whose surface the remesh no longer reaches; returns their count.
-int find_lost_charts(const detail::AtlasCharts& a, const isochart::Mesh& remesh, double texel,
-                     std::vector<char>& lost) {
+// The number of charts whose surface the remesh no longer reaches.
+int count_lost_charts(const detail::AtlasCharts& a, const isochart::Mesh& remesh, double texel) {
   const int nc = static_cast<int>(a.charts.size());
-  lost.assign(nc, 0);
   if (remesh.num_faces() == 0 || !(texel > 0)) return 0;
   const detail::ClosestPoints near(remesh);
   if (near.empty()) return 0;
@@ -90,13 +88,15 @@ int find_lost_charts(const detail::AtlasCharts& a, const isochart::Mesh& remesh,
   int count = 0;
   for (int c = 0; c < nc; ++c) {
     const std::vector<int>& faces = a.charts[c].faces;
-    for (std::size_t i = 0; i < faces.size() && !lost[c]; i += static_cast<std::size_t>(stride)) {
+    for (std::size_t i = 0; i < faces.size(); i += static_cast<std::size_t>(stride)) {
       const isochart::Face& f = a.mesh->faces[faces[i]];
       const isochart::Vec3d p =
           (a.mesh->positions[f[0]] + a.mesh->positions[f[1]] + a.mesh->positions[f[2]]) / 3.0;
-      if (isochart::squared_norm(near.closest(p).point - p) > limit2) lost[c] = 1;
+      if (isochart::squared_norm(near.closest(p).point - p) > limit2) {
+        ++count;
+        break;
+      }
     }
-    count += lost[c];
   }
   return count;
 }
@@ -253,8 +253,7 @@ Level build_prepared(const detail::AtlasCharts& a, const LevelOptions& o, const 
   }
   // Every attempt's time counts, as packing (the attempts differ in their packing).
   best.stats.seconds_packing += spent - work_seconds(best.stats);
-  std::vector<char> lost;
-  best.stats.lost_charts = find_lost_charts(a, best.remesh.mesh, best.stats.texel_size, lost);
+  best.stats.lost_charts = count_lost_charts(a, best.remesh.mesh, best.stats.texel_size);
   return best;
 }
 

@@ -180,8 +180,8 @@ TEST_CASE("the Linf lower bound from angle defects holds and spares hopeless cha
   // neither optimized nor replaced by LSCM.
   std::vector<Vec2d> stretched = regular;
   for (Vec2d& x : stretched) x.x *= 1.3;
-  CHECK(linf_bound_unreachable(g, topo, 0.99 * bound));
-  CHECK_FALSE(linf_bound_unreachable(g, topo, 1.01 * bound));
+  CHECK(linf_bound_unreachable(g, &topo, 0.99 * bound));
+  CHECK_FALSE(linf_bound_unreachable(g, nullptr, 1.01 * bound));
   ParamOptions tight = loose;
   tight.max_linf = 0.99 * bound;
   const ChartParam q = parameterize(g, stretched, tight);

@@ -61,7 +61,7 @@ struct MeshTexture {
   std::string file;       ///< an image file, or empty
   std::string bytes;      ///< an embedded image's encoded bytes, or empty
   std::string extension;  ///< ".png" or ".jpg" for `bytes`
-  std::string problem;    ///< why a texture the file names cannot be used (glTF), or empty
+  std::string problem;    ///< why a texture the file names cannot be used, or empty
 };
 /// \throw InputError when the mesh file itself cannot be read; a texture named but missing is
 ///        returned by name (reading it then fails).
