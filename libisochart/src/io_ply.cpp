@@ -56,6 +56,22 @@ bool is_float(Type t) {
   return t == Type::F32 || t == Type::F64;
 }
 
+// The values an integer type holds, as a binary file could store them.
+bool fits(Type t, double v) {
+  if (is_float(t)) return true;
+  if (v != std::floor(v)) return false;
+  const int bits = 8 * type_size(t);
+  const bool is_signed = t == Type::I8 || t == Type::I16 || t == Type::I32;
+  const double lo = is_signed ? -std::ldexp(1.0, bits - 1) : 0.0;
+  const double hi = is_signed ? std::ldexp(1.0, bits - 1) - 1 : std::ldexp(1.0, bits) - 1;
+  return v >= lo && v <= hi;
+}
+
+const char* type_name(Type t) {
+  static const char* names[] = {"char", "uchar", "short", "ushort", "int", "uint", "float", "double"};
+  return names[static_cast<int>(t)];
+}
+
 bool host_is_little_endian() {
   const std::uint16_t one = 1;
   unsigned char first;
@@ -121,12 +137,16 @@ class RecordReader {
     }
   }
 
-  double read(Type t) {
+  /// `check_type`: an ASCII value must fit the declared type (callers with a more telling
+  /// check of their own pass false).
+  double read(Type t, bool check_type = true) {
     if (ascii_) {
       std::string_view tok;
       if (!next_token(rest_, tok)) fail("expected more values on this line");
       double v = 0;
       if (!parse_double(tok, v)) fail(quoted(tok) + " is not a number");
+      // A binary file could not hold it either: the header's type is wrong, or the value is.
+      if (check_type && !fits(t, v)) fail(quoted(tok) + " is not a " + type_name(t) + " value, as the header declares");
       return v;
     }
     const int n = type_size(t);
@@ -179,8 +199,8 @@ class RecordReader {
 
   /// A list length: non-negative and small enough for the rest of the file.
   long long read_count(Type t, int value_bytes) {
-    const double c = read(t);
-    if (!(c >= 0) || c != std::floor(c)) {
+    const double c = read(t, false);
+    if (!(c >= 0) || c != std::floor(c) || !fits(t, c)) {
       std::string text = "invalid list length ";
       append_number(text, c);
       fail(text);
@@ -287,6 +307,10 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
         fail_at_line(path, ln,
                      "unknown PLY format " + quoted(f) +
                          " (expected ascii, binary_little_endian or binary_big_endian)");
+      std::string_view version;
+      if (!next_token(rest, version)) fail_at_line(path, ln, "format line has no version (expected 1.0)");
+      if (version != "1.0") fail_at_line(path, ln, "PLY version " + quoted(version) + " is not supported (only 1.0)");
+      if (saw_format) fail_at_line(path, ln, "a second format line");
       saw_format = true;
     } else if (tok == "element") {
       Element e;
@@ -296,6 +320,10 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
         fail_at_line(path, ln, "expected 'element NAME COUNT' with 0 <= COUNT < 2^31");
       e.name = std::string(name);
       e.line = ln;
+      for (const Element& other : elements)
+        if (other.name == e.name)
+          fail_at_line(path, ln, "element " + quoted(name) + " is declared twice (first on line " +
+                                     std::to_string(other.line) + ")");
       elements.push_back(std::move(e));
     } else if (tok == "property") {
       if (elements.empty()) fail_at_line(path, ln, "property before any element");
@@ -315,6 +343,10 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
       std::string_view name;
       if (!next_token(rest, name)) fail_at_line(path, ln, "property has no name");
       p.name = std::string(name);
+      for (const Property& other : elements.back().props)
+        if (other.name == p.name)
+          fail_at_line(path, ln, "property " + quoted(name) + " of element " + quoted(elements.back().name) +
+                                     " is declared twice");
       elements.back().props.push_back(std::move(p));
     } else {
       fail_at_line(path, ln, "unknown PLY header keyword " + quoted(tok));
@@ -387,7 +419,7 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
             auto& poly = raw.polygons[static_cast<std::size_t>(i)];
             poly.resize(static_cast<std::size_t>(n));
             for (auto& v : poly) {
-              const double x = in.read(p.type);
+              const double x = in.read(p.type, false);
               if (!(x >= 0 && x <= INT_MAX) || x != std::floor(x)) {
                 // %.17g, not a cast: 1e20 cast to long long printed as -9223372036854775808.
                 char text[40];
@@ -395,6 +427,9 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
                 in.fail(std::string("vertex index ") + text +
                         (x == std::floor(x) ? " is out of range" : " is not a whole number"));
               }
+              if (!fits(p.type, x))
+                in.fail("vertex index " + std::to_string(static_cast<long long>(x)) + " is not a " +
+                        type_name(p.type) + " value, as the header declares");
               v = static_cast<int>(x);
             }
           } else if (is_face && p.role == Role::TexCoord) {
