@@ -158,6 +158,24 @@ class GltfReader {
  private:
   [[noreturn]] void fail(const std::string& message) const { throw InputError(path_, message); }
 
+  // A transform of the wrong length would otherwise be dropped silently, placing the mesh
+  // somewhere the file did not say.
+  void check_transform(int node, const tinygltf::Node& n) const {
+    const struct {
+      const char* name;
+      const std::vector<double>& values;
+      std::size_t size;
+    } parts[] = {{"matrix", n.matrix, 16}, {"translation", n.translation, 3}, {"rotation", n.rotation, 4},
+                 {"scale", n.scale, 3}};
+    for (const auto& p : parts) {
+      if (!p.values.empty() && p.values.size() != p.size)
+        fail("node " + std::to_string(node) + " has a " + p.name + " of " + std::to_string(p.values.size()) +
+             " numbers, not " + std::to_string(p.size));
+      if (!std::all_of(p.values.begin(), p.values.end(), [](double v) { return std::isfinite(v); }))
+        fail("node " + std::to_string(node) + " has a " + p.name + " that is not finite");
+    }
+  }
+
   // Depth first, children in order, with a stack of its own: a chain of nodes as deep as the
   // file is long would overflow the call stack (20,000 levels did).
   void visit(int root, const Mat4& parent) {
@@ -173,6 +191,7 @@ class GltfReader {
         fail("node " + std::to_string(node) + " is reached twice (a cycle or a node with two parents)");
       visited_[node] = 1;
       const tinygltf::Node& n = model_.nodes[node];
+      check_transform(node, n);
       const Mat4 world = multiply(above, local_transform(n));
       if (n.mesh >= 0) add_mesh(n.mesh, world);
       for (auto c = n.children.rbegin(); c != n.children.rend(); ++c) stack.emplace_back(*c, world);
@@ -621,6 +640,15 @@ RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, c
   }
   if (!ok)
     throw InputError(path, "invalid glTF: " + (err.empty() ? std::string("cannot parse") : first_line(err)));
+  // glTF 1.0 files parse as 2.0 with their meshes missing; say what they are instead.
+  if (model.asset.version.substr(0, 2) != "2.")
+    throw InputError(path, "glTF version " + quoted(model.asset.version) + " is not supported (only 2.x)");
+  if (binary) {
+    // Bytes 4–7, little-endian; tinygltf has checked that the header is there.
+    std::uint32_t version = 0;
+    for (int i = 3; i >= 0; --i) version = version << 8 | static_cast<unsigned char>(data[4 + i]);
+    if (version != 2) throw InputError(path, "glb container version " + std::to_string(version) + " is not supported (only 2)");
+  }
   return GltfReader(path, model, options).read();
 }
 
