@@ -82,9 +82,10 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
     fail_at_line(
         path, count_ln,
         "vertex and face counts " + std::to_string(nv) + " " + std::to_string(nf) + " are out of range");
-  // A vertex line takes at least 6 bytes ("0 0 0\n") and a face line 8 ("3 0 1 2\n"): a
-  // header claiming more than the file can hold is refused before anything is allocated.
-  if (nv * 6 + nf * 8 > static_cast<long long>(lines.remaining()) + 2)
+  // A vertex line takes at least 6 bytes ("0 0 0\n") and a face line 2 (a corner count, which
+  // may be wrong; that is said with its line): a header claiming more than the file can hold
+  // is refused before anything is allocated.
+  if (nv * 6 + nf * 2 > static_cast<long long>(lines.remaining()) + 2)
     fail_at_line(path, count_ln,
                  "header declares " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
                      " faces, but only " + std::to_string(lines.remaining()) +
@@ -144,8 +145,25 @@ RawMesh read_off(const std::string& path, std::string_view data, const LoadOptio
     rest = line;
     long long k = 0;
     next_token(rest, tok);
-    if (!parse_int(tok, k)) fail_at_line(path, ln, quoted(tok) + " is not a corner count");
-    if (k < 3) fail_at_line(path, ln, "face has " + std::to_string(k) + " corners; a face needs at least 3");
+    // The first face line holding what a vertex line holds: the header counts too few vertices.
+    const auto vertex_like = [&]() -> std::string {
+      if (j > 0) return std::string();
+      std::string_view r = line, t;
+      int n = 0;
+      double x;
+      bool whole = true;
+      while (next_token(r, t)) {
+        if (!parse_double(t, x) || ++n > fixed) return std::string();
+        whole &= x == std::floor(x);
+      }
+      // "2 0 1" is a face of two corners as it stands; "0 0 1" or "0.5 0 0" is not a face.
+      if (n != fixed || (whole && n - 1 == k)) return std::string();
+      return " (it looks like a vertex: does the header count too few vertices?)";
+    };
+    if (!parse_int(tok, k)) fail_at_line(path, ln, quoted(tok) + " is not a corner count" + vertex_like());
+    if (k < 3)
+      fail_at_line(path, ln,
+                   "face has " + std::to_string(k) + " corners; a face needs at least 3" + vertex_like());
     if (k > static_cast<long long>(rest.size()))
       fail_at_line(path, ln, "face declares " + std::to_string(k) + " corners but lists fewer indices");
     auto& poly = raw.polygons[static_cast<std::size_t>(j)];
