@@ -387,6 +387,13 @@ TEST_CASE("OFF: errors name the line", "[io]") {
         "line 6: vertex index 5 is out of range (the file has 3 vertices)");
   CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n") ==
         "line 6: face has 2 corners; a face needs at least 3");
+  // A vertex more than the header counts is read as the first face, and said to look like one.
+  CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n") ==
+        "line 6: face has 0 corners; a face needs at least 3 (it looks like a vertex: does the header count "
+        "too few vertices?)");
+  // A face of no corners is said as such, not taken for a truncated file.
+  CHECK(err("OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n0\n") ==
+        "line 8: face has 0 corners; a face needs at least 3");
   CHECK(err("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n") ==
         "line 6: face declares 4 corners but lists 3 indices");
   CHECK(err("OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 # padding, so the size check passes\n") ==
@@ -557,6 +564,28 @@ TEST_CASE("PLY: errors name the line or the element", "[io]") {
         "line 13: face 0: vertex index 1e+20 is out of range");
   CHECK(load_error(d.write("a4.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 1.5\n")) ==
         "line 13: face 0: vertex index 1.5 is not a whole number");
+  // What a binary file of the same header could not hold, an ASCII one may not either.
+  std::string uchar_head = ascii_head;
+  uchar_head.replace(uchar_head.find("float x"), 7, "uchar x");
+  CHECK(load_error(d.write("u300.ply", uchar_head + "0 0 0\n300 0 0\n0 1 0\n3 0 1 2\n")) ==
+        "line 11: vertex 1: '300' is not a uchar value, as the header declares");
+  std::string uchar_index = ascii_head;
+  uchar_index.replace(uchar_index.find("uchar int"), 9, "uchar uchar");
+  CHECK(load_error(d.write("i300.ply", uchar_index + "0 0 0\n1 0 0\n0 1 0\n3 0 1 300\n")) ==
+        "line 13: face 0: vertex index 300 is not a uchar value, as the header declares");
+  // Declarations made twice, and a PLY version other than 1.0.
+  std::string twice = ascii_head;
+  twice.replace(twice.find("property float y"), 16, "property float x");
+  CHECK(load_error(d.write("dupx.ply", twice + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")) ==
+        "line 5: property 'x' of element 'vertex' is declared twice");
+  std::string two_faces = ascii_head;
+  two_faces.replace(two_faces.find("end_header"), 10, "element face 0\nend_header");
+  CHECK(load_error(d.write("dupface.ply", two_faces + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")) ==
+        "line 9: element 'face' is declared twice (first on line 7)");
+  std::string v2 = ascii_head;
+  v2.replace(v2.find("1.0"), 3, "2.0");
+  CHECK(load_error(d.write("v2.ply", v2 + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")) ==
+        "line 2: PLY version '2.0' is not supported (only 1.0)");
   CHECK(load_error(d.write("a3.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n")) ==
         "face 0 refers to vertex 3, but there are only 3 vertices");
   CHECK(load_error(d.write("a4.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n")) ==
@@ -792,6 +821,17 @@ TEST_CASE("glTF: malformed files are clear errors", "[io]") {
   s.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
   s.doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
   CHECK_THAT(load_error(d.write("draco.glb", glb_of(s))), Catch::Contains("unsupported extension"));
+  // A transform of the wrong length, a glTF 1.0 asset, a glb container of version 1.
+  s = gltf_sample();
+  s.doc["nodes"][0].erase("translation");
+  s.doc["nodes"][0]["matrix"] = std::vector<double>(15, 0.0);
+  CHECK(load_error(d.write("matrix15.glb", glb_of(s))) == "node 0 has a matrix of 15 numbers, not 16");
+  s = gltf_sample();
+  s.doc["asset"]["version"] = "1.0";
+  CHECK(load_error(d.write("v1.glb", glb_of(s))) == "glTF version '1.0' is not supported (only 2.x)");
+  std::string v1 = glb_of(gltf_sample());
+  v1[4] = 1;
+  CHECK(load_error(d.write("container1.glb", v1)) == "glb container version 1 is not supported (only 2)");
   // Only points and lines: said so, not "no vertices".
   s = gltf_sample();
   for (auto& mesh : s.doc["meshes"])
