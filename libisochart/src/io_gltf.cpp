@@ -165,7 +165,9 @@ class GltfReader {
       const char* name;
       const std::vector<double>& values;
       std::size_t size;
-    } parts[] = {{"matrix", n.matrix, 16}, {"translation", n.translation, 3}, {"rotation", n.rotation, 4},
+    } parts[] = {{"matrix", n.matrix, 16},
+                 {"translation", n.translation, 3},
+                 {"rotation", n.rotation, 4},
                  {"scale", n.scale, 3}};
     for (const auto& p : parts) {
       if (!p.values.empty() && p.values.size() != p.size)
@@ -647,7 +649,9 @@ RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, c
     // Bytes 4–7, little-endian; tinygltf has checked that the header is there.
     std::uint32_t version = 0;
     for (int i = 3; i >= 0; --i) version = version << 8 | static_cast<unsigned char>(data[4 + i]);
-    if (version != 2) throw InputError(path, "glb container version " + std::to_string(version) + " is not supported (only 2)");
+    if (version != 2)
+      throw InputError(path,
+                       "glb container version " + std::to_string(version) + " is not supported (only 2)");
   }
   return GltfReader(path, model, options).read();
 }

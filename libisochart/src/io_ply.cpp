@@ -146,7 +146,8 @@ class RecordReader {
       double v = 0;
       if (!parse_double(tok, v)) fail(quoted(tok) + " is not a number");
       // A binary file could not hold it either: the header's type is wrong, or the value is.
-      if (check_type && !fits(t, v)) fail(quoted(tok) + " is not a " + type_name(t) + " value, as the header declares");
+      if (check_type && !fits(t, v))
+        fail(quoted(tok) + " is not a " + type_name(t) + " value, as the header declares");
       return v;
     }
     const int n = type_size(t);
@@ -309,7 +310,8 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
                          " (expected ascii, binary_little_endian or binary_big_endian)");
       std::string_view version;
       if (!next_token(rest, version)) fail_at_line(path, ln, "format line has no version (expected 1.0)");
-      if (version != "1.0") fail_at_line(path, ln, "PLY version " + quoted(version) + " is not supported (only 1.0)");
+      if (version != "1.0")
+        fail_at_line(path, ln, "PLY version " + quoted(version) + " is not supported (only 1.0)");
       if (saw_format) fail_at_line(path, ln, "a second format line");
       saw_format = true;
     } else if (tok == "element") {
@@ -322,8 +324,9 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
       e.line = ln;
       for (const Element& other : elements)
         if (other.name == e.name)
-          fail_at_line(path, ln, "element " + quoted(name) + " is declared twice (first on line " +
-                                     std::to_string(other.line) + ")");
+          fail_at_line(path, ln,
+                       "element " + quoted(name) + " is declared twice (first on line " +
+                           std::to_string(other.line) + ")");
       elements.push_back(std::move(e));
     } else if (tok == "property") {
       if (elements.empty()) fail_at_line(path, ln, "property before any element");
@@ -345,8 +348,9 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
       p.name = std::string(name);
       for (const Property& other : elements.back().props)
         if (other.name == p.name)
-          fail_at_line(path, ln, "property " + quoted(name) + " of element " + quoted(elements.back().name) +
-                                     " is declared twice");
+          fail_at_line(path, ln,
+                       "property " + quoted(name) + " of element " + quoted(elements.back().name) +
+                           " is declared twice");
       elements.back().props.push_back(std::move(p));
     } else {
       fail_at_line(path, ln, "unknown PLY header keyword " + quoted(tok));
