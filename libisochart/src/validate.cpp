@@ -587,7 +587,6 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
     if (poly.size() == 3) {
       tris.push_back({0, 1, 2});
     } else {
-      ++report.polygons;
       if (!repair)
         need_repair("face " + std::to_string(f) + " has " + std::to_string(poly.size()) + " corners, not 3");
       // Repeated consecutive corners carry no area; dropping them first keeps ear clipping
@@ -597,9 +596,10 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
         if (corners.empty() || poly[corners.back()] != poly[i]) corners.push_back(i);
       while (corners.size() > 1 && poly[corners.back()] == poly[corners.front()]) corners.pop_back();
       if (corners.size() < 3) {
-        ++report.degenerate_faces;
+        ++report.degenerate_faces;  // a polygon of one or two distinct corners: not triangulated
         continue;
       }
+      ++report.polygons;
       triangulate(raw.positions, poly, corners, tris);
       triangles_from_polygons += static_cast<int>(tris.size());
     }

@@ -258,6 +258,12 @@ TEST_CASE("degenerate faces are found exactly and removed", "[validate]") {
   m = validate(rep_vertex, rep);
   CHECK(rep.degenerate_faces == 1);
   CHECK(m.num_faces() == 1);
+  // A polygon of one vertex repeated is degenerate, not also "triangulated into 0 triangles".
+  RawMesh one_corner = raw_of({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 1, 2}, {1, 1, 1, 1, 1}});
+  m = validate(one_corner, rep);
+  CHECK(rep.degenerate_faces == 1);
+  CHECK(rep.polygons == 0);
+  CHECK(m.num_faces() == 1);
 }
 
 TEST_CASE("duplicate faces are removed whatever their corner order", "[validate]") {
