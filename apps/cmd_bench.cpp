@@ -230,11 +230,9 @@ class Bench {
     return b;
   }
 
-  BuiltAtlas external(const std::string& file) {
-    BuiltAtlas b;
-    const auto t0 = Clock::now();
-    // Loaded once: an explicit external:FILE is tried against every mesh.
-    // Its texture's shape is read (and said) once too.
+  /// Loaded once: an explicit external:FILE is tried against every mesh. Its texture's shape
+  /// is read (and said) once too.
+  const std::pair<isochart::Mesh, double>& load_external(const std::string& file) {
     auto it = loaded_.find(file);
     if (it == loaded_.end()) {
       isochart::Mesh m = load_any(ctx_, file, true);
@@ -246,9 +244,16 @@ class Bench {
                     "its charts are measured and packed at that shape (--atlas-aspect sets it)");
       it = loaded_.emplace(file, std::make_pair(std::move(m), aspect)).first;
     }
-    b.geometry = it->second.first;
+    return it->second;
+  }
+
+  BuiltAtlas external(const std::string& file) {
+    BuiltAtlas b;
+    const auto t0 = Clock::now();
+    const auto& loaded = load_external(file);
+    b.geometry = loaded.first;
     try {
-      b.atlas = isochart::atlas_from_uvs(b.geometry, it->second.second);
+      b.atlas = isochart::atlas_from_uvs(b.geometry, loaded.second);
     } catch (const isochart::InputError& e) {
       throw isochart::InputError(file, e.what());
     }
@@ -820,6 +825,11 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   // row away.
   std::vector<isochart::Mesh> meshes;
   for (const auto& m : a.meshes) meshes.push_back(load_any(ctx, m));
+  Bench bench(ctx, a, methods);
+  // An external:FILE that cannot be read is the user's mistake, like a missing one, not an
+  // n/a row per mesh.
+  for (const Method& meth : methods)
+    if (meth.kind == Kind::ExternalFile) bench.load_external(meth.file);
   {
     std::error_code ec;
     fs::create_directories(a.out, ec);
@@ -829,7 +839,6 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
         {}, {(out / "bench.md").string(), (out / "bench.csv").string(), (out / "sweep.csv").string()});
   }
 
-  Bench bench(ctx, a, methods);
   int k = 0;
   int n = 0;
   for (const auto& m : a.meshes)

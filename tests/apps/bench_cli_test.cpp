@@ -319,6 +319,9 @@ TEST_CASE("bench: bad inputs are one line and exit code 2", "[bench]") {
            // built-in meshes, and two meshes of one name were merged in the tables.
            {"bench builtin:sphere '" + bad.string() + "' --methods lscm --sweep none",
             "line 3: vertex index 9 is out of range"},
+           // An external atlas given by name that cannot be read: not an n/a row per mesh.
+           {"bench builtin:sphere --methods external:'" + bad.string() + "' --sweep none",
+            "line 3: vertex index 9 is out of range"},
            {"bench --methods lscm --data /nonexistent/data --sweep none",
             "/nonexistent/data: --data: no such directory"},
            {"bench builtin:sphere '" + (dir / "sphere.obj").string() + "' --methods lscm",
