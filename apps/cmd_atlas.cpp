@@ -179,6 +179,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   double coverage = 0;
   for (const isochart::Face& t : atlas.face_uvs)
     coverage += std::abs(isochart::signed_area(atlas.uvs[t[0]], atlas.uvs[t[1]], atlas.uvs[t[2]]));
+  bool warned_long_chart = false;
   if (s.packing_ratio < 0.25 && atlas.num_charts() > 0) {
     const int nc = atlas.num_charts();
     std::vector<isochart::Vec2d> lo(nc, {1e300, 1e300}), hi(nc, {-1e300, -1e300});
@@ -205,7 +206,19 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
         << " times longer than wide; a texture of its shape (--width/--height) holds it at a higher "
            "resolution";
       ctx.warn(a.input, m.str());
+      warned_long_chart = true;
     }
+  }
+  // The other way round: charts of no particular shape in a texture many times longer than
+  // high line up along it and leave most of it empty (fandisk fills 1.9 % of 600×12).
+  const double texture_aspect = static_cast<double>(a.options.pack.width) / a.options.pack.height;
+  if (std::abs(std::log(texture_aspect)) >= std::log(4.0) && coverage < 0.5 && !warned_long_chart) {
+    std::ostringstream m;
+    m << "the charts fill " << std::setprecision(2) << 100 * coverage << " % of the " << a.options.pack.width
+      << "x" << a.options.pack.height
+      << " texture: in one this elongated they leave most of it empty; a squarer texture of as many "
+         "texels holds them at a higher resolution";
+    ctx.warn(a.input, m.str());
   }
 
   nlohmann::json j;

@@ -789,6 +789,26 @@ TEST_CASE("a long thin chart in a square texture gets a warning naming the remed
   CHECK(read_bytes(err).empty());
 }
 
+TEST_CASE("a texture many times longer than high, which the charts cannot fill, gets a warning", "[cli]") {
+  // A square's one chart fills at most 1/16 of a 16:1 texture or geometry image.
+  TempDir tmp("elongated");
+  const fs::path square = tmp.path / "square.obj", err = tmp.path / "err.txt";
+  write_bytes(square, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  CHECK(run_cli("atlas '" + square.string() + "' -o '" + (tmp.path / "a.obj").string() +
+                    "' --width 1024 --height 64",
+                err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains("square.obj: the charts fill") &&
+                                  Catch::Contains("% of the 1024x64 texture: in one this elongated"));
+  CHECK(run_cli("remesh '" + square.string() + "' -o '" + (tmp.path / "r.ply").string() +
+                    "' --width 256 --height 16 --no-psnr",
+                err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains("r.ply: 256x16 level defines") &&
+                                  Catch::Contains("% of its samples: in an image this elongated"));
+  // Square, neither says a word.
+  CHECK(run_cli("atlas '" + square.string() + "' -o '" + (tmp.path / "b.obj").string() + "'", err) == 0);
+  CHECK(read_bytes(err).empty());
+}
+
 TEST_CASE("synth warns when --direction is along the surface normal", "[cli]") {
   // On a flat square seen face-on, (0,0,1) has no direction along the surface; the field then
   // follows another axis, which the user should hear about.
