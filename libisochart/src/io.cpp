@@ -268,12 +268,20 @@ MeshTexture find_mesh_texture(const std::string& path) {
 namespace {
 
 // Used vertices at the bit-identical position of an earlier used vertex (−0 equal to +0).
+// A triangle with two corners on one point has no area and validation drops it, so it uses
+// no vertex: its corners are not a cut in the surface.
 long long count_coincident(const RawMesh& raw) {
   const long long nv = static_cast<long long>(raw.positions.size());
   std::vector<char> used(raw.positions.size(), 0);
-  for (const auto& poly : raw.polygons)
+  const auto in_range = [&](int v) { return v >= 0 && v < nv; };
+  for (const auto& poly : raw.polygons) {
+    if (poly.size() == 3 && std::all_of(poly.begin(), poly.end(), in_range)) {
+      const Vec3d &a = raw.positions[poly[0]], &b = raw.positions[poly[1]], &c = raw.positions[poly[2]];
+      if (a == b || b == c || a == c) continue;
+    }
     for (int v : poly)
-      if (v >= 0 && v < nv) used[v] = 1;
+      if (in_range(v)) used[v] = 1;
+  }
   std::vector<std::array<double, 3>> p;
   p.reserve(raw.positions.size());
   for (long long v = 0; v < nv; ++v)

@@ -298,6 +298,19 @@ TEST_CASE("a triangle soup is named, and --weld joins it", "[cli]") {
   CHECK(read_bytes(err).empty());
 }
 
+TEST_CASE("a vertex used only by a face dropped as degenerate is not called a cut", "[cli]") {
+  // Vertex 4 sits on vertex 3 and only the zero-area face 1 3 4 uses it: once that face is
+  // dropped, nothing is cut there.
+  TempDir tmp("coincident");
+  const fs::path mesh = tmp.path / "c.obj", err = tmp.path / "err.txt";
+  std::ofstream(mesh) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 1 1 0\nf 1 2 3\nf 1 3 4\n";
+  REQUIRE(run_cli("info '" + mesh.string() + "'", err) == 0);
+  const std::string e = read_bytes(err);
+  CHECK_THAT(
+      e, Catch::Contains("removed 1 degenerate face") && Catch::Contains("dropped 1 unreferenced vertex"));
+  CHECK(e.find("without being joined") == std::string::npos);
+}
+
 TEST_CASE("a double-sided card keeps its back, and its atlas reads back without a soup warning", "[cli]") {
   TempDir tmp("card");
   const fs::path card = tmp.path / "card.obj", atlas = tmp.path / "atlas.obj", out = tmp.path / "r.json",
