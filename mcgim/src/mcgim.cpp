@@ -135,12 +135,16 @@ Level build_once(const detail::AtlasCharts& a, const LevelOptions& o, const std:
 
   lv.image = std::move(sm.image);
   t0 = Clock::now();
-  lv.remesh = reconstruct(lv.image);
+  const bool optimize = o.optimize && o.optimize_iterations + o.geometric_iterations > 0;
+  lv.remesh = reconstruct(lv.image, !optimize);
   st.seconds_reconstruction = since(t0);
 
-  if (o.optimize && o.optimize_iterations + o.geometric_iterations > 0) {
+  if (optimize) {
     t0 = Clock::now();
     detail::optimize_samples(a, pl, sm.param, o, lv.image, lv.remesh, progress);
+    // Samples the fit left on one point are joined now (none, mostly: the fit moves them
+    // apart, which joining them first would have prevented).
+    lv.remesh = reconstruct(lv.image);
     st.seconds_optimization = since(t0);
   }
   st.defined_samples = lv.image.defined_samples();

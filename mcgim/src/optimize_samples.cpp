@@ -243,7 +243,7 @@ void clamp_moves(const std::vector<Vec3d>& anchor, double max_move, std::vector<
 void write_back(const std::vector<Vec3d>& pos, GeometryImage& im, Remesh& r) {
   for (std::size_t i = 0; i < im.group.size(); ++i)
     if (r.sample_vertex[i] >= 0) im.positions[i] = pos[r.sample_vertex[i]];
-  r = reconstruct(im);
+  r = reconstruct(im, false);
 }
 
 // Least squares: Σ area·|Σ w_i x_i − target|² + λ Σ |x_v − anchor_v|², then each vertex kept
@@ -582,7 +582,7 @@ void optimize_samples(const AtlasCharts& a, const Placement& pl, const std::vect
       for (;;) {
         im.block_diagonal = kept;
         choose_diagonals(original, source, r, interior_only, im);
-        Remesh next = reconstruct(im);
+        Remesh next = reconstruct(im, false);
         const TopologyCheck after = check_topology(next.mesh);
         if (distance(after) < distance(before) ||
             (distance(after) == distance(before) && same_topology(before, after))) {

@@ -1,11 +1,13 @@
 #include <algorithm>
 #include <array>
 #include <cstdlib>
+#include <map>
+#include <numeric>
 #include <string>
 
 #include "isochart/error.h"
-#include "mcgim/geometry_image.h"
 #include "isochart/union_find.h"
+#include "mcgim/geometry_image.h"
 
 namespace mcgim {
 
@@ -21,6 +23,143 @@ bool is_degenerate(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   const double l = std::max({squared_norm(b - a), squared_norm(c - b), squared_norm(a - c)});
   const double cr = norm(cross(b - a, c - a));
   return cr * cr <= 1e-18 * l * l;
+}
+
+// Zippering can snap neighbouring samples of different groups onto exactly the same point
+// (several samples pulled onto one chart corner at a coarse level); the faces between them
+// have zero area, and strict readers, ours included, refuse such a file. Joining the two
+// groups removes those faces without moving any point. A join is made only when it keeps the
+// surface a manifold of the same topology (the link condition: the two vertices' common
+// neighbours are exactly the far corners of the faces on their edge, and two boundary
+// vertices are joined only along a boundary edge). Returns the faces dropped; `rep` (the
+// identity on entry) maps every group to the group standing for it.
+int join_coincident_groups(const GeometryImage& im, const std::vector<int>& group_sample,
+                           std::vector<std::array<int, 3>>& tris, std::vector<int>& tri_chart,
+                           std::vector<int>& rep) {
+  const int ng = im.num_groups, nt = static_cast<int>(tris.size());
+  auto pos = [&](int g) -> const Vec3d& { return im.positions[group_sample[g]]; };
+  auto same = [&](int a, int b) {
+    const Vec3d &p = pos(a), &q = pos(b);
+    return p[0] == q[0] && p[1] == q[1] && p[2] == q[2];
+  };
+  std::vector<std::pair<int, int>> candidates;
+  for (const auto& t : tris)
+    for (int k = 0; k < 3; ++k) {
+      const int a = im.group[t[k]], b = im.group[t[(k + 1) % 3]];
+      if (same(a, b)) candidates.push_back({std::min(a, b), std::max(a, b)});
+    }
+  if (candidates.empty()) return 0;
+  std::sort(candidates.begin(), candidates.end());
+  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+  // Faces around each group, and the groups each representative stands for.
+  std::vector<int> offset(ng + 1, 0);
+  for (const auto& t : tris)
+    for (int s : t) ++offset[im.group[s] + 1];
+  for (int g = 0; g < ng; ++g) offset[g + 1] += offset[g];
+  std::vector<int> incident(offset.back()), fill(offset.begin(), offset.end() - 1);
+  for (int i = 0; i < nt; ++i)
+    for (int s : tris[i]) incident[fill[im.group[s]]++] = i;
+  // Groups joined into a representative (empty: just itself).
+  std::map<int, std::vector<int>> members;
+  std::vector<char> dead(nt, 0);
+  auto corner = [&](int i, int k) { return rep[im.group[tris[i][k]]]; };
+  // Calls fn(face) for the live faces around representative v.
+  auto for_faces = [&](int v, auto&& fn) {
+    auto one = [&](int g) {
+      for (int x = offset[g]; x < offset[g + 1]; ++x)
+        if (!dead[incident[x]]) fn(incident[x]);
+    };
+    const auto m = members.find(v);
+    if (m == members.end())
+      one(v);
+    else
+      for (int g : m->second) one(g);
+  };
+  auto has = [&](int i, int v) { return corner(i, 0) == v || corner(i, 1) == v || corner(i, 2) == v; };
+  // Neighbours of v with the number of live faces on each edge.
+  auto neighbours = [&](int v, std::vector<std::pair<int, int>>& out) {
+    out.clear();
+    for_faces(v, [&](int i) {
+      for (int k = 0; k < 3; ++k)
+        if (corner(i, k) != v) out.push_back({corner(i, k), 1});
+    });
+    std::sort(out.begin(), out.end());
+    std::size_t n = 0;
+    for (std::size_t x = 0; x < out.size(); ++x)
+      if (n > 0 && out[n - 1].first == out[x].first)
+        ++out[n - 1].second;
+      else
+        out[n++] = out[x];
+    out.resize(n);
+  };
+  auto on_boundary = [](const std::vector<std::pair<int, int>>& n) {
+    return std::any_of(n.begin(), n.end(), [](const std::pair<int, int>& e) { return e.second == 1; });
+  };
+  std::vector<std::pair<int, int>> na, nb;
+  std::vector<int> far, common;
+  int dropped = 0;
+  for (const auto& c : candidates) {
+    const int a = rep[c.first], b = rep[c.second];
+    if (a == b) continue;
+    neighbours(a, na);
+    neighbours(b, nb);
+    const auto ab = std::lower_bound(na.begin(), na.end(), std::make_pair(b, 0));
+    if (ab == na.end() || ab->first != b || ab->second > 2) continue;
+    if (on_boundary(na) && on_boundary(nb) && ab->second != 1) continue;
+    far.clear();
+    for_faces(a, [&](int i) {
+      if (!has(i, b)) return;
+      for (int k = 0; k < 3; ++k)
+        if (corner(i, k) != a && corner(i, k) != b) far.push_back(corner(i, k));
+    });
+    std::sort(far.begin(), far.end());
+    common.clear();
+    for (std::size_t x = 0, y = 0; x < na.size() && y < nb.size();) {
+      if (na[x].first < nb[y].first)
+        ++x;
+      else if (nb[y].first < na[x].first)
+        ++y;
+      else {
+        common.push_back(na[x].first);
+        ++x;
+        ++y;
+      }
+    }
+    if (common != far) continue;
+    // Faces on both far corners and a, and on both and b, would become one face twice (the
+    // edge half of the link condition: a tetrahedron closed over edge ab).
+    if (far.size() == 2) {
+      bool with_a = false, with_b = false;
+      for_faces(far[0], [&](int i) {
+        if (!has(i, far[1])) return;
+        with_a |= has(i, a);
+        with_b |= has(i, b);
+      });
+      if (with_a && with_b) continue;
+    }
+    for_faces(a, [&](int i) {
+      if (has(i, b)) {
+        dead[i] = 1;
+        ++dropped;
+      }
+    });
+    auto& ma = members.try_emplace(a, 1, a).first->second;
+    auto mb = members.find(b);
+    if (mb == members.end()) mb = members.try_emplace(b, 1, b).first;
+    for (int g : mb->second) rep[g] = a;
+    ma.insert(ma.end(), mb->second.begin(), mb->second.end());
+    members.erase(mb);
+  }
+  std::size_t out = 0;
+  for (int i = 0; i < nt; ++i) {
+    if (dead[i]) continue;
+    tris[out] = tris[i];
+    tri_chart[out] = tri_chart[i];
+    ++out;
+  }
+  tris.resize(out);
+  tri_chart.resize(out);
+  return dropped;
 }
 
 }  // namespace
@@ -43,7 +182,7 @@ int GeometryImage::defined_samples() const {
   return static_cast<int>(std::count_if(chart.begin(), chart.end(), [](int c) { return c >= 0; }));
 }
 
-Remesh reconstruct(const GeometryImage& im) {
+Remesh reconstruct(const GeometryImage& im, bool join_coincident) {
   const int W = im.width, H = im.height;
   const std::size_t N = static_cast<std::size_t>(W) * H;
   if (W < 1 || H < 1 || im.positions.size() != N || im.normals.size() != N || im.chart.size() != N ||
@@ -218,10 +357,13 @@ Remesh reconstruct(const GeometryImage& im) {
     tris.resize(out);
     tri_chart.resize(out);
   }
+  std::vector<int> rep(im.num_groups);
+  std::iota(rep.begin(), rep.end(), 0);
+  if (join_coincident) r.collapsed_faces += join_coincident_groups(im, group_sample, tris, tri_chart, rep);
   // Vertices in group order.
   std::vector<int> group_vertex(im.num_groups, -1);
   for (const auto& t : tris)
-    for (int s : t) group_vertex[im.group[s]] = 0;
+    for (int s : t) group_vertex[rep[im.group[s]]] = 0;
   int nv = 0;
   for (int g = 0; g < im.num_groups; ++g)
     if (group_vertex[g] == 0) group_vertex[g] = nv++;
@@ -236,7 +378,7 @@ Remesh reconstruct(const GeometryImage& im) {
   r.sample_vertex.assign(N, -1);
   std::vector<int> sample_uv(N, -1);
   for (std::size_t i = 0; i < N; ++i)
-    if (im.defined(static_cast<int>(i))) r.sample_vertex[i] = group_vertex[im.group[i]];
+    if (im.defined(static_cast<int>(i))) r.sample_vertex[i] = group_vertex[rep[im.group[i]]];
   m.faces.reserve(tris.size());
   m.face_uvs.reserve(tris.size());
   m.face_groups = tri_chart;

@@ -219,6 +219,57 @@ TEST_CASE("zero-area and collapsed triangles are counted consistently", "[mcgim]
   CHECK(r.hausdorff < 1e-9);
 }
 
+namespace {
+
+// A flat W×H grid of samples, one chart, every sample its own group.
+GeometryImage flat_grid(int w, int h) {
+  GeometryImage im;
+  im.width = w;
+  im.height = h;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      im.positions.push_back({double(x), double(y), 0.0});
+      im.normals.push_back({0.0, 0.0, 1.0});
+      im.chart.push_back(0);
+      im.group.push_back(y * w + x);
+      im.face.push_back(0);
+      im.barycentric.push_back({1.0, 0.0, 0.0});
+    }
+  im.num_charts = 1;
+  im.num_groups = w * h;
+  return im;
+}
+
+}  // namespace
+
+TEST_CASE("samples snapped onto one point are joined, not left as zero-area faces", "[mcgim]") {
+  // Four samples of a block on one point, as zippering leaves them around a chart corner at
+  // coarse levels: the faces between them are dropped and the four become one vertex.
+  GeometryImage im = flat_grid(5, 5);
+  for (int i : {im.index(2, 2), im.index(3, 2), im.index(2, 3), im.index(3, 3)})
+    im.positions[i] = {2.5, 2.5, 0.0};
+  const Remesh r = reconstruct(im);
+  const TopologyCheck t = check_topology(r.mesh);
+  CHECK(r.degenerate_faces == 0);
+  CHECK(t.degenerate_faces == 0);
+  CHECK(t.manifold());
+  CHECK(t.euler_characteristic == 1);
+  CHECK(t.boundary_loops == 1);
+  CHECK(r.mesh.num_vertices() == 25 - 3);
+  CHECK(r.mesh.num_faces() == 32 - 2 - 4);  // the block's two faces and the four beside it
+  CHECK(r.sample_vertex[im.index(2, 2)] == r.sample_vertex[im.index(3, 3)]);
+  // Kept apart (as during the sample fit), the zero-area faces are there and counted.
+  CHECK(reconstruct(im, false).degenerate_faces == 6);
+  // Two boundary samples joined by an inner edge would pinch the strip into a bow tie: kept
+  // apart, their zero-area faces are counted instead.
+  GeometryImage strip = flat_grid(3, 2);
+  strip.positions[strip.index(1, 1)] = strip.positions[strip.index(1, 0)];
+  const Remesh s = reconstruct(strip);
+  CHECK(check_topology(s.mesh).manifold());
+  CHECK(s.mesh.num_vertices() == 6);
+  CHECK(s.degenerate_faces == 2);
+}
+
 TEST_CASE("sample optimization brings the remesh closer to the surface", "[mcgim]") {
   const isochart::Mesh m = mcgim_test::sphere_atlas(32, 64);
   DistanceOptions d;

@@ -50,14 +50,17 @@ struct GeometryImage {
 
 /// A mesh rebuilt from a geometry image.
 struct Remesh {
-  /// One vertex per zipper group used by a face; faces oriented like the original surface;
+  /// One vertex per zipper group used by a face (or per set of joined groups, see reconstruct);
+  /// faces oriented like the original surface;
   /// per-corner uvs are the corner samples' texture coordinates, face_groups the chart ids,
   /// normals the samples' normals.
   isochart::Mesh mesh;
   std::vector<int> sample_vertex;                 ///< W·H → mesh vertex, −1 when not used
   std::vector<std::array<int, 3>> face_samples;   ///< per face, its corner sample indices
   int degenerate_faces = 0;  ///< faces kept although their area is zero (collinear corners)
-  int collapsed_faces = 0;   ///< block triangles dropped because two corners share a group
+  /// Block triangles dropped because two corners share a group, or lie on exactly one point
+  /// and their groups were joined.
+  int collapsed_faces = 0;
   /// Faces dropped as pockets: pairs of triangles on the same three groups with opposite
   /// orientations (a seam corner cut on both sides), and small pieces that touch the rest of
   /// the mesh only at vertices (a contracted seam closed them up).
@@ -68,11 +71,15 @@ struct Remesh {
 /// triangles split along the shorter 3-D diagonal (or the one `block_diagonal` names, unless
 /// that diagonal's ends were welded), a block with 3 gives one, then samples are
 /// welded by group and triangles whose corners fall into fewer than 3 groups are dropped, as
-/// are pockets (see Remesh::pocket_faces). Zero-area triangles are kept (they are what makes
-/// zippered seams watertight) and counted: a triangle counts as zero-area when its height is
-/// below 1e-9 of its longest edge.
+/// are pockets (see Remesh::pocket_faces). Groups at exactly the same position that share an
+/// edge are then joined where the link condition allows (the surface stays manifold, its
+/// topology unchanged), which drops the faces on that edge. Other zero-area triangles are
+/// kept (they are what makes zippered seams watertight) and counted: a triangle counts as
+/// zero-area when its height is below 1e-9 of its longest edge.
+/// `join_coincident` false keeps such groups apart (the sample fit, which may still move them
+/// apart, rebuilds with false and joins only at the end).
 /// \throw isochart::InputError when a block mixes two charts or the arrays have the wrong size.
-Remesh reconstruct(const GeometryImage& image);
+Remesh reconstruct(const GeometryImage& image, bool join_coincident = true);
 
 /// Topology figures of a mesh, used to check reconstructions.
 struct TopologyCheck {
