@@ -425,11 +425,10 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
             for (auto& v : poly) {
               const double x = in.read(p.type, false);
               if (!(x >= 0 && x <= INT_MAX) || x != std::floor(x)) {
-                // %.17g, not a cast: 1e20 cast to long long printed as -9223372036854775808.
-                char text[40];
-                std::snprintf(text, sizeof text, "%.17g", x);
-                in.fail(std::string("vertex index ") + text +
-                        (x == std::floor(x) ? " is out of range" : " is not a whole number"));
+                // As a double, not cast: 1e20 cast to long long printed as -9223372036854775808.
+                std::string text = "vertex index ";
+                append_number(text, x);
+                in.fail(text + (x == std::floor(x) ? " is out of range" : " is not a whole number"));
               }
               if (!fits(p.type, x))
                 in.fail("vertex index " + std::to_string(static_cast<long long>(x)) + " is not a " +
