@@ -288,6 +288,12 @@ std::string topology_warning(const LevelStats& s) {
     return level + " lost part of the surface of " + std::to_string(s.lost_charts) +
            (s.lost_charts == 1 ? " chart" : " charts") +
            " (over 3 texels from the remesh: too thin or small for their samples; try a larger resolution)";
+  // Collinear samples across a part thinner than a texel, which no join removes: counted, but
+  // a strict reader (ours with --no-repair) refuses the file and others drop the faces.
+  if (s.degenerate_triangles > 0)
+    return level + " has " + std::to_string(s.degenerate_triangles) +
+           (s.degenerate_triangles == 1 ? " zero-area triangle" : " zero-area triangles") +
+           " (where the surface is thinner than a texel); readers that drop them leave holes there";
   return {};
 }
 

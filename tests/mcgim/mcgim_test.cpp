@@ -698,6 +698,11 @@ TEST_CASE("a level's topology warning names what it lost or where it is pinched"
   s.topology.euler_characteristic = -25;
   s.topology.boundary_loops = 27;
   CHECK(topology_warning(s).empty());
+  s.degenerate_triangles = 2;
+  CHECK(topology_warning(s) ==
+        "64x64 level has 2 zero-area triangles (where the surface is thinner than a texel); "
+        "readers that drop them leave holes there");
+  s.degenerate_triangles = 0;
   s.topology.nonmanifold_vertices = 1;
   CHECK(topology_warning(s) ==
         "64x64 level has 1 non-manifold vertex (pinched where the surface is thinner than its samples)");

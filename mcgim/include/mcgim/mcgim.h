@@ -129,9 +129,10 @@ Level build_level(const isochart::Mesh& atlas, const LevelOptions& options = {},
                   const isochart::Progress& progress = {});
 
 /// What is wrong with a level's remesh for a user, in one line ("WxH level does not keep the
-/// input's topology (...)", "WxH level has N non-manifold vertices (...)" or "WxH level lost
-/// part of the surface of N charts (...)"); empty when it keeps the input's Euler
-/// characteristic and boundary loops, is manifold and lost no chart.
+/// input's topology (...)", "WxH level has N non-manifold vertices (...)", "WxH level lost
+/// part of the surface of N charts (...)" or "WxH level has N zero-area triangles (...)"),
+/// the first that applies; empty when it keeps the input's Euler characteristic and boundary
+/// loops, is manifold, lost no chart and has no zero-area triangle.
 std::string topology_warning(const LevelStats& stats);
 
 /// \throw isochart::InputError("", "WxH level: no 2x2 block of defined samples, ...") when the
