@@ -1,5 +1,6 @@
 #include "cli.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -58,6 +59,19 @@ void Context::check_paths(const std::vector<std::string>& inputs, std::vector<st
     if (!S_ISDIR(st.st_mode)) throw isochart::InputError(out, "cannot write: " + dir + " is not a directory");
     if (::access(dir.c_str(), W_OK) != 0)
       throw isochart::InputError(out, "cannot write: " + std::string(std::strerror(errno)));
+    // access() says yes to root on a read-only or special file system (/sys, a read-only
+    // mount): only creating a file there tells.
+    {
+      const std::string probe =
+          dir + "/.isocharts-probe-" + std::to_string(::getpid()) + "-" + std::to_string(k);
+      const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+      if (fd < 0 && errno != EEXIST)
+        throw isochart::InputError(out, "cannot write in " + dir + ": " + std::string(std::strerror(errno)));
+      if (fd >= 0) {
+        ::close(fd);
+        ::unlink(probe.c_str());
+      }
+    }
     // Outputs are written to a temporary file and renamed, never into a device or a pipe
     // (/dev/null, /dev/stdout): refused now rather than after the work.
     if (::stat(out.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
