@@ -800,8 +800,11 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   // remesh's limit (about 600 bytes a sample): 4096 ran out of memory after minutes of work.
   if (a.res < 8 || a.res > 2048) bad_option("--res must be between 8 and 2048, not " + std::to_string(a.res));
   if (a.pack_res < 64 || a.pack_res > 8192) bad_option("--pack-res must be between 64 and 8192");
-  if (!(a.max_l2 >= 1.0)) bad_option("--max-l2 must be at least 1");
-  if (!(a.max_linf >= 1.0)) bad_option("--max-linf must be at least 1");
+  // Infinite bounds passed here and failed every atlas row afterwards, quietly.
+  if (!(a.max_l2 >= 1.0) || !std::isfinite(a.max_l2))
+    bad_option("--max-l2 must be a finite number of at least 1");
+  if (!(a.max_linf >= 1.0) || !std::isfinite(a.max_linf))
+    bad_option("--max-linf must be a finite number of at least 1");
   if (!sweep_text.empty()) a.sweep = sweep_text == "none" ? std::vector<double>{} : parse_list(sweep_text);
   const std::vector<Method> methods = parse_methods_impl(a.methods);
   {

@@ -312,6 +312,8 @@ TEST_CASE("bench: bad inputs are one line and exit code 2", "[bench]") {
            {"bench builtin:sphere --methods external:/nonexistent/x.obj", "/nonexistent/x.obj: no such file"},
            {"bench /nonexistent/mesh.obj --methods isochart", "/nonexistent/mesh.obj: no such file"},
            {"bench builtin:sphere --res 3", "--res must be between 8 and 2048"},
+           {"bench builtin:sphere --max-l2 inf", "--max-l2 must be a finite number of at least 1"},
+           {"bench builtin:sphere --max-linf inf", "--max-linf must be a finite number of at least 1"},
            {"bench builtin:sphere --res 4096", "--res must be between 8 and 2048"},
            {"bench builtin:sphere --sweep 1.1,abc", "--sweep: 'abc'"},
            // Found before any work, and before the output directory is made: an unreadable
