@@ -189,6 +189,19 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
                           "²); the coarser levels hold fewer than --start-samples " +
                           std::to_string(so.min_level_samples) + " samples");
 
+  // The default scale moved to a limit (an exemplar magnified past the finest image, or shrunk
+  // below 4 pixels a texel): the pattern is not the size the README promises, so say so.
+  if (a.scale <= 0 && a.pixels_per_texel <= 0) {
+    const double asked = exemplar.width / (0.1 * isochart::bounding_box(atlas).diagonal());
+    if (std::abs(std::log(r.scale / asked)) > 1e-6) {
+      std::ostringstream w;
+      w << "the default scale (" << asked << " exemplar pixels per unit length, the exemplar spanning a "
+        << "tenth of the bounding-box diagonal) is out of the range this pyramid can synthesize; used "
+        << r.scale << (r.scale > asked ? ", the smallest" : ", the largest") << " that works";
+      ctx.warn(a.exemplar, w.str());
+    }
+  }
+
   // The default scale ties the exemplar to the model's size, not its own: a 4096² photograph
   // was synthesized from a 20² thumbnail without a word.
   if (a.scale <= 0 && a.pixels_per_texel <= 0 && !r.levels.empty() && r.levels.front().exemplar_factor > 8) {

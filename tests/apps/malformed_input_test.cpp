@@ -826,6 +826,27 @@ TEST_CASE("a texture many times longer than high, which the charts cannot fill, 
   CHECK(read_bytes(err).empty());
 }
 
+TEST_CASE("synth says when the default scale is moved to one the pyramid can synthesize", "[cli]") {
+  // A 1000 x 0.01 strip: a tenth of its diagonal holds the exemplar magnified past the finest
+  // image, so the default scale is raised; that was silent while the same --scale is refused.
+  TempDir tmp("strip_scale");
+  const fs::path strip = tmp.path / "strip.obj", err = tmp.path / "err.txt";
+  std::string obj;
+  const int n = 200;
+  for (int i = 0; i <= n; ++i)
+    obj += "v " + std::to_string(5 * i) + " 0 0\nv " + std::to_string(5 * i) + " 0.01 0\n";
+  for (int i = 0; i < n; ++i) {
+    const int a = 2 * i + 1, b = a + 1, c = a + 2, d = a + 3;
+    obj += "f " + std::to_string(a) + " " + std::to_string(c) + " " + std::to_string(d) + "\nf " +
+           std::to_string(a) + " " + std::to_string(d) + " " + std::to_string(b) + "\n";
+  }
+  write_bytes(strip, obj);
+  CHECK(run_cli("synth '" + strip.string() + "' -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32",
+                err) == 0);
+  CHECK_THAT(read_bytes(err), Catch::Contains("builtin:bricks: the default scale (") &&
+                                  Catch::Contains("the smallest that works"));
+}
+
 TEST_CASE("synth warns when --direction is along the surface normal", "[cli]") {
   // On a flat square seen face-on, (0,0,1) has no direction along the surface; the field then
   // follows another axis, which the user should hear about.
