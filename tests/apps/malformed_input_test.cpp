@@ -298,6 +298,24 @@ TEST_CASE("a triangle soup is named, and --weld joins it", "[cli]") {
   CHECK(read_bytes(err).empty());
 }
 
+TEST_CASE("stats reads our atlas of a repaired non-manifold input as the surface it is", "[cli]") {
+  // A cube with a fin on one edge: the atlas splits that edge, leaving two vertices at each of
+  // its ends. Joining them again for stats rebuilt the edge of three faces: repair warnings,
+  // and --no-repair refused the file that info accepts.
+  TempDir tmp("fin");
+  const fs::path mesh = tmp.path / "fin.obj", atlas = tmp.path / "fin_atlas.obj", err = tmp.path / "err.txt";
+  std::ofstream(mesh)
+      << "v 0 0 0\nv 0 0 1\nv 0 1 0\nv 0 1 1\nv 1 0 0\nv 1 0 1\nv 1 1 0\nv 1 1 1\nv -1 0 0.5\n"
+         "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\n"
+         "f 1 7 3\nf 2 4 8\nf 2 8 6\nf 1 2 9\n";
+  REQUIRE(run_cli("atlas '" + mesh.string() + "' -o '" + atlas.string() + "'", err) == 0);
+  CHECK(run_cli("--no-repair info '" + atlas.string() + "'", err) == 0);
+  CHECK(run_cli("--no-repair stats '" + atlas.string() + "'", err) == 0);
+  CHECK(read_bytes(err).empty());
+  CHECK(run_cli("stats '" + atlas.string() + "'", err) == 0);
+  CHECK(read_bytes(err).empty());
+}
+
 TEST_CASE("a vertex used only by a face dropped as degenerate is not called a cut", "[cli]") {
   // Vertex 4 sits on vertex 3 and only the zero-area face 1 3 4 uses it: once that face is
   // dropped, nothing is cut there.
