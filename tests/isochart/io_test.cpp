@@ -564,27 +564,24 @@ TEST_CASE("PLY: errors name the line or the element", "[io]") {
         "line 13: face 0: vertex index 1e+20 is out of range");
   CHECK(load_error(d.write("a4.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 1.5\n")) ==
         "line 13: face 0: vertex index 1.5 is not a whole number");
+  // The header with one declaration changed, and the same body.
+  const auto edited = [&](const std::string& from, const std::string& to) {
+    std::string h = ascii_head;
+    h.replace(h.find(from), from.size(), to);
+    return h;
+  };
+  const std::string triangle = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
   // What a binary file of the same header could not hold, an ASCII one may not either.
-  std::string uchar_head = ascii_head;
-  uchar_head.replace(uchar_head.find("float x"), 7, "uchar x");
-  CHECK(load_error(d.write("u300.ply", uchar_head + "0 0 0\n300 0 0\n0 1 0\n3 0 1 2\n")) ==
+  CHECK(load_error(d.write("u300.ply", edited("float x", "uchar x") + "0 0 0\n300 0 0\n0 1 0\n3 0 1 2\n")) ==
         "line 11: vertex 1: '300' is not a uchar value, as the header declares");
-  std::string uchar_index = ascii_head;
-  uchar_index.replace(uchar_index.find("uchar int"), 9, "uchar uchar");
-  CHECK(load_error(d.write("i300.ply", uchar_index + "0 0 0\n1 0 0\n0 1 0\n3 0 1 300\n")) ==
+  CHECK(load_error(d.write("i300.ply", edited("uchar int", "uchar uchar") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 300\n")) ==
         "line 13: face 0: vertex index 300 is not a uchar value, as the header declares");
   // Declarations made twice, and a PLY version other than 1.0.
-  std::string twice = ascii_head;
-  twice.replace(twice.find("property float y"), 16, "property float x");
-  CHECK(load_error(d.write("dupx.ply", twice + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")) ==
+  CHECK(load_error(d.write("dupx.ply", edited("property float y", "property float x") + triangle)) ==
         "line 5: property 'x' of element 'vertex' is declared twice");
-  std::string two_faces = ascii_head;
-  two_faces.replace(two_faces.find("end_header"), 10, "element face 0\nend_header");
-  CHECK(load_error(d.write("dupface.ply", two_faces + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")) ==
+  CHECK(load_error(d.write("dupface.ply", edited("end_header", "element face 0\nend_header") + triangle)) ==
         "line 9: element 'face' is declared twice (first on line 7)");
-  std::string v2 = ascii_head;
-  v2.replace(v2.find("1.0"), 3, "2.0");
-  CHECK(load_error(d.write("v2.ply", v2 + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")) ==
+  CHECK(load_error(d.write("v2.ply", edited("1.0", "2.0") + triangle)) ==
         "line 2: PLY version '2.0' is not supported (only 1.0)");
   CHECK(load_error(d.write("a3.ply", ascii_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n")) ==
         "face 0 refers to vertex 3, but there are only 3 vertices");
