@@ -163,7 +163,11 @@ Atlas build_signal_atlas(const Mesh& mesh, const Signal& signal, const AtlasOpti
     o.face_metric = so.chart_lambda > 0 ? signal_metric(mesh, imt, so.chart_lambda) : metric;
     o.max_geometric_l2 = so.max_geometric_l2;
     o.signal_split_efficiency = so.split_efficiency;
-    if (so.beta < 1) {
+    // A flat signal (face_imt zero everywhere) has no distances to add; a constant texture's
+    // per-vertex values still differ by float rounding, which the distances' normalization
+    // would turn into a full-weight signal.
+    const bool flat = std::all_of(imt.begin(), imt.end(), [](const Imt& m) { return m == Imt{0, 0, 0}; });
+    if (so.beta < 1 && !flat) {
       o.signal_beta = so.beta;
       o.signal_dimension = signal.dimension;
       o.vertex_signal = vertex_signal(mesh, signal);
