@@ -41,6 +41,16 @@ Mesh plane(int n) {
   return m;
 }
 
+// `image` mapped through the mesh's own texture coordinates.
+Signal mapped_signal(const Mesh& m, const Image& image) {
+  Signal s;
+  s.dimension = image.channels;
+  s.texture = image;
+  s.uvs = m.uvs;
+  s.face_uvs = m.face_uvs;
+  return s;
+}
+
 Signal scalar_signal(const Mesh& m, double (*f)(double, double)) {
   Signal s;
   s.dimension = 1;
@@ -80,11 +90,7 @@ TEST_CASE("IMT of a mapped ramp texture matches its gradient", "[signal]") {
   for (int y = 0; y < 8; ++y)
     for (int x = 0; x < 64; ++x) ramp.at(x, y, 0) = static_cast<float>((x + 0.5) / 64);
   for (auto& uv : m.uvs) uv = {0.1 + 0.5 * uv.x, 0.2 + 0.5 * uv.y};
-  Signal s;
-  s.dimension = 1;
-  s.texture = ramp;
-  s.uvs = m.uvs;
-  s.face_uvs = m.face_uvs;
+  const Signal s = mapped_signal(m, ramp);
   const std::vector<Imt> imt = face_imt(m, s);
   const std::vector<double> area = face_areas(m);
   for (size_t f = 0; f < imt.size(); ++f) {
@@ -305,11 +311,7 @@ TEST_CASE("a texture flat up to float rounding is no signal", "[signal]") {
   for (int y = 0; y < 32; ++y)
     for (int x = 0; x < 32; ++x)
       for (int c = 0; c < 3; ++c) grey.at(x, y, c) = 0.5f + ((x + y + c) % 2 ? 3e-8f : 0.0f);
-  Signal s;
-  s.dimension = 3;
-  s.texture = grey;
-  s.uvs = m.uvs;
-  s.face_uvs = m.face_uvs;
+  const Signal s = mapped_signal(m, grey);
   const std::vector<Imt> imt = face_imt(m, s);
   CHECK(std::all_of(imt.begin(), imt.end(), [](const Imt& t) { return t == Imt{0, 0, 0}; }));
   CHECK(signal_stretch(m, imt) == 0);
@@ -596,11 +598,7 @@ TEST_CASE("a mapped texture signal bakes back to itself through its own atlas", 
     for (int x = 0; x < 64; ++x)
       for (int c = 0; c < 3; ++c)
         tex.at(x, y, c) = static_cast<float>(0.5 + 0.4 * std::sin(0.2 * x + 0.1 * c * y));
-  Signal s;
-  s.dimension = 3;
-  s.texture = tex;
-  s.uvs = m.uvs;
-  s.face_uvs = m.face_uvs;
+  const Signal s = mapped_signal(m, tex);
   const SaeResult same = signal_approximation_error(m, s, 64, 64);
   const SaeResult coarse = signal_approximation_error(m, s, 16, 16);
   CHECK(same.signal_rms > 0.1);
