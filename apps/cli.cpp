@@ -157,51 +157,16 @@ void Context::check_image_outputs(const std::vector<std::string>& paths) const {
     if (!p.empty()) isochart::check_image_output(p);
 }
 
-namespace {
-
-// Repairs that only joining vertices at one position can call for: our own atlas of a
-// non-manifold or non-orientable input keeps the copies its repair made, at the same position.
-bool needs_surface_repair(const isochart::ValidationReport& r) {
-  return r.nonmanifold_edges > 0 || r.nonmanifold_vertices > 0 || r.cut_edges > 0;
-}
-
-}  // namespace
-
 isochart::LoadResult Context::load(const std::string& path, bool atlas) const {
   isochart::LoadOptions lo;
   lo.repair = !opts.no_repair;
   lo.weld = atlas || opts.weld;
-  isochart::LoadResult r;
-  if (atlas && !opts.weld) {
-    // Joining an atlas's corners at one position closes its UV seams, but it would also undo
-    // those splits, then warn about repairing them again (or refuse with --no-repair) for a
-    // file that reads as a clean surface as it is. Such a file is read as it is.
-    isochart::LoadOptions probe = lo;
-    probe.repair = true;
-    r = isochart::load_mesh(path, probe);
-    if (needs_surface_repair(r.report)) {
-      isochart::LoadOptions plain = lo;
-      plain.weld = false;
-      plain.repair = true;
-      isochart::LoadResult as_is = isochart::load_mesh(path, plain);
-      if (!needs_surface_repair(as_is.report)) {
-        plain.repair = lo.repair;
-        r = lo.repair ? std::move(as_is) : isochart::load_mesh(path, plain);
-        // Its vertices at one position are what keeps it a surface: not a cut to --weld.
-        auto& w = r.report.warnings;
-        w.erase(std::remove_if(
-                    w.begin(), w.end(),
-                    [](const std::string& m) { return m.find("without being joined") != std::string::npos; }),
-                w.end());
-      } else if (!lo.repair) {
-        r = isochart::load_mesh(path, lo);  // refuses, naming the problem
-      }
-    } else if (!lo.repair) {
-      r = isochart::load_mesh(path, lo);
-    }
-  } else {
-    r = isochart::load_mesh(path, lo);
-  }
+  // Joining an atlas's corners at one position closes its UV seams, but for our own atlas of
+  // a non-manifold or non-orientable input it would also undo the splits its repair made, then
+  // warn about repairing them again (or refuse with --no-repair) for a file that reads as a
+  // clean surface as it is.
+  lo.weld_only_if_surface = atlas && !opts.weld;
+  isochart::LoadResult r = isochart::load_mesh(path, lo);
   for (const auto& w : r.report.warnings) warn(path, w);
   return r;
 }

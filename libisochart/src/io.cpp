@@ -302,27 +302,60 @@ long long count_coincident(const RawMesh& raw) {
 
 }  // namespace
 
+namespace {
+
+// Repairs that only joining vertices at one position can call for.
+bool needs_surface_repair(const ValidationReport& r) {
+  return r.nonmanifold_edges > 0 || r.nonmanifold_vertices > 0 || r.cut_edges > 0;
+}
+
+}  // namespace
+
 LoadResult load_mesh(const std::string& path, const LoadOptions& options) {
   RawMesh raw = read_raw_mesh(path, options);
   const MeshFormat fmt = format_from_path(path);
-  if (options.weld || fmt == MeshFormat::Gltf || fmt == MeshFormat::Glb) io_detail::weld_equal_positions(raw);
+  const bool gltf = fmt == MeshFormat::Gltf || fmt == MeshFormat::Glb;
   // The limit is on triangles, so polygons count with their triangulation.
   long long triangles = 0;
   for (const auto& poly : raw.polygons)
     triangles += std::max<long long>(1, static_cast<long long>(poly.size()) - 2);
   check_face_limit(path, triangles, options);
   LoadResult r;
-  const bool welded = options.weld || fmt == MeshFormat::Gltf || fmt == MeshFormat::Glb;
+  bool welded = options.weld || gltf;
+  bool validated = false;  // r holds the repairing validation of `raw`
+  if (options.weld && options.weld_only_if_surface && !gltf) {
+    RawMesh joined = raw;
+    io_detail::weld_equal_positions(joined);
+    r.mesh = validate_mesh(joined, true, r.report);
+    validated = true;
+    if (needs_surface_repair(r.report)) {
+      LoadResult as_is;
+      as_is.mesh = validate_mesh(raw, true, as_is.report);
+      if (!needs_surface_repair(as_is.report)) {
+        r = std::move(as_is);
+        welded = false;
+      }
+    }
+    if (welded) raw = std::move(joined);
+  } else if (welded) {
+    io_detail::weld_equal_positions(raw);
+  }
+  // Unjoined corners at one position are a cut, unless they are what keeps the surface one.
+  const bool kept_split = options.weld && !welded;
   long long coincident = welded ? 0 : count_coincident(raw);
-  if (coincident > 0) {
+  if (coincident > 0 && !kept_split) {
     // The two sides of a double-sided sheet, as we write them, lie on each other by design.
     RawMesh joined = raw, split;
     io_detail::weld_equal_positions(joined);
     if (split_double_sided(joined, split) > 0) coincident = count_coincident(split);
   }
-  r.mesh = validate_mesh(raw, options.repair, r.report);
+  // Without repair, the same validation refuses the file, naming its first problem.
+  if (!validated || !options.repair) {
+    r.report = ValidationReport{};
+    r.mesh = validate_mesh(raw, options.repair, r.report);
+  }
   r.report.coincident_vertices = coincident;
-  if (coincident > 0)
+  if (coincident > 0 && !kept_split)
     r.report.warnings.push_back(std::to_string(coincident) +
                                 (coincident == 1 ? " vertex lies" : " vertices lie") +
                                 " at the position of another vertex without being joined to it, so the "

@@ -210,6 +210,37 @@ TEST_CASE("atlases split at their UV seams are joined again when asked", "[io]")
   CHECK(m.uvs[m.face_uvs[3][0]].x == Approx(0.75));
 }
 
+TEST_CASE("weld_only_if_surface keeps the split that keeps an atlas a surface", "[io]") {
+  // Our atlas of a cube with a fin on its edge 1-2: the repair gave corner 2 a copy (10), and
+  // joined again, the edge has three faces.
+  TempDir d;
+  const std::string path =
+      d.write("fin.obj",
+              "v 0 0 0\nv 0 0 1\nv 0 1 0\nv 0 1 1\nv 1 0 0\nv 1 0 1\nv 1 1 0\nv 1 1 1\nv -1 0 0.5\nv 0 0 1\n"
+              "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 10 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\n"
+              "f 1 7 3\nf 2 4 8\nf 10 8 6\nf 1 2 9\n");
+  LoadOptions lo;
+  lo.weld = true;
+  CHECK(load_mesh(path, lo).report.nonmanifold_edges == 1);
+  lo.weld_only_if_surface = true;
+  for (bool repair : {true, false}) {
+    lo.repair = repair;
+    const LoadResult r = load_mesh(path, lo);
+    CHECK(r.mesh.num_vertices() == 10);
+    CHECK(r.report.nonmanifold_edges == 0);
+    CHECK(r.report.cut_edges == 0);
+    CHECK(r.report.warnings.empty());
+  }
+  // Where joining needs no repair, it joins.
+  const std::string closed = d.write("closed.obj",
+                                     "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 0 0\n"
+                                     "f 1 3 2\nf 5 2 4\nf 1 4 3\nf 2 3 4\n");
+  lo.repair = true;
+  const LoadResult r = load_mesh(closed, lo);
+  CHECK(r.mesh.num_vertices() == 4);
+  CHECK(r.report.warnings.empty());
+}
+
 TEST_CASE("OBJ: colours, normals, UVs and groups", "[io]") {
   TempDir d;
   const std::string path =

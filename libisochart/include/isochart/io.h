@@ -39,6 +39,11 @@ struct LoadOptions {
   /// files are always joined (a vertex per combination of attributes); atlases from other
   /// tools arrive split at their UV seams in any format (one vertex per position and UV).
   bool weld = false;
+  /// With `weld`, for a file of our own atlas: when joining would leave a surface that needs
+  /// a cut or split repaired (non-manifold, or non-orientable) and the file as written does
+  /// not, the file is read as written. Its corners at one position are then what keeps it a
+  /// surface (the copies an earlier repair made), and are not reported as a cut.
+  bool weld_only_if_surface = false;
 };
 
 struct LoadResult {
