@@ -192,7 +192,7 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   // The default scale moved to a limit (an exemplar magnified past the finest image, or shrunk
   // below 4 pixels a texel): the pattern is not the size the README promises, so say so.
   if (a.scale <= 0 && a.pixels_per_texel <= 0) {
-    const double asked = exemplar.width / (0.1 * isochart::bounding_box(atlas).diagonal());
+    const double asked = r.requested_scale;
     if (std::abs(std::log(r.scale / asked)) > 1e-6) {
       std::ostringstream w;
       w << "the default scale (" << asked << " exemplar pixels per unit length, the exemplar spanning a "

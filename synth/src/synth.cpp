@@ -589,6 +589,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   res.scale = o.pixels_per_texel > 0 && pyramid[0].stats.texel_size > 0 ? o.pixels_per_texel / pyramid[0].stats.texel_size
               : o.scale > 0                                               ? o.scale
                                         : exemplar.width / (0.1 * isochart::bounding_box(atlas).diagonal());
+  res.requested_scale = res.scale;
 
   // Each limit on the scale below moves the default scale to the limit, and refuses a scale the
   // user asked for, saying why and what works.

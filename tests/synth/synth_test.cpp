@@ -704,6 +704,14 @@ TEST_CASE("an exemplar too large to search at the scale asked for is refused wit
   so.coarsest_passes = 0;
   const synth::SynthResult r = synth::synthesize(atlas, pyramid, big, so);
   CHECK(r.levels[0].exemplar_width * r.levels[0].exemplar_height <= 1024 * 1024);
+  CHECK(r.requested_scale == r.scale);
+  // The default scale (the exemplar across a tenth of the diagonal) would shrink it below 4
+  // pixels across; it is moved to that limit, and the result says what it was.
+  so.pixels_per_texel = 0;
+  const synth::SynthResult d = synth::synthesize(atlas, pyramid, big, so);
+  CHECK(d.requested_scale == Approx(1100 / (0.1 * isochart::bounding_box(atlas).diagonal())));
+  CHECK(d.scale * pyramid[0].stats.texel_size == Approx(1100 / 4.0));
+  CHECK(d.scale < d.requested_scale);
 }
 
 TEST_CASE("taps cross seams whatever the mesh's units", "[synth]") {

@@ -132,6 +132,10 @@ struct SynthResult {
   /// where the sample has no neighbour in its chart.
   std::vector<std::array<float, 4>> exemplar_jacobians;
   double scale = 0;  ///< exemplar pixels per unit of surface length actually used
+  /// The scale before the limits on it: the default (the exemplar spanning a tenth of the
+  /// bounding-box diagonal) or the one asked for. Differs from `scale` only for the default,
+  /// moved into the range the pyramid can synthesize (a scale asked for outside it is refused).
+  double requested_scale = 0;
   int start_level = 0;  ///< pyramid index synthesis started at (see SynthOptions::start_level)
   /// Symmetry N of the direction field used (see SynthOptions::direction_symmetry).
   int direction_symmetry = 1;
