@@ -62,6 +62,22 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   a.options.graph_cut = !a.no_graph_cut;
   a.options.merge = !a.no_merge;
   isochart::validate_options(a.options);
+  if (!a.signal.empty()) {
+    if (a.signal_use == "none") a.signal_options.use = isochart::SignalUse::None;
+    else if (a.signal_use == "param") a.signal_options.use = isochart::SignalUse::Param;
+    else if (a.signal_use == "full") a.signal_options.use = isochart::SignalUse::Full;
+    else bad_option("--signal-use must be none, param or full");
+    isochart::validate_signal_options(a.signal_options);
+    // Chart building by the signal is what --signal-use full adds; elsewhere these change nothing.
+    if (a.signal_options.use != isochart::SignalUse::Full)
+      for (const char* name : {"--beta", "--chart-lambda", "--split-efficiency"})
+        if (a.given.has(name))
+          bad_option(std::string(name) + " goes with --signal-use full (it shapes the charts)");
+    // A geometric atlas keeps --max-l2; the signal's parameterizations are what this bounds.
+    if (a.signal_options.use == isochart::SignalUse::None && a.given.has("--max-geometric-l2"))
+      bad_option(
+          "--max-geometric-l2 goes with --signal-use param or full (--max-l2 bounds a geometric atlas)");
+  }
 
   isochart::LoadResult in = ctx.load(a.input);
   const double load_seconds = seconds_since(t0);
@@ -69,15 +85,6 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   isochart::SignalAtlasStats sig_stats;
   isochart::SaeResult sae;
   if (!a.signal.empty()) {
-    if (a.signal_use == "none") a.signal_options.use = isochart::SignalUse::None;
-    else if (a.signal_use == "param") a.signal_options.use = isochart::SignalUse::Param;
-    else if (a.signal_use == "full") a.signal_options.use = isochart::SignalUse::Full;
-    else bad_option("--signal-use must be none, param or full");
-    // Chart building by the signal is what --signal-use full adds; elsewhere these change nothing.
-    if (a.signal_options.use != isochart::SignalUse::Full)
-      for (const char* name : {"--beta", "--chart-lambda", "--split-efficiency"})
-        if (a.given.has(name))
-          bad_option(std::string(name) + " goes with --signal-use full (it shapes the charts)");
     check_signal_uvs(a.signal, in, a.input);
     signal = isochart::make_signal(in.mesh, a.signal, a.input);
     if (!a.imt_out.empty()) isochart::write_imt(a.imt_out, isochart::face_imt(in.mesh, signal));

@@ -144,15 +144,21 @@ std::vector<double> vertex_signal(const Mesh& mesh, const Signal& s) {
 
 }  // namespace
 
-Atlas build_signal_atlas(const Mesh& mesh, const Signal& signal, const AtlasOptions& options,
-                         const SignalAtlasOptions& so, SignalAtlasStats* stats, const Progress& progress) {
-  validate_options(options);
+void validate_signal_options(const SignalAtlasOptions& so) {
   if (!(so.lambda >= 0) || !std::isfinite(so.lambda)) throw InputError("", "--lambda must be a number >= 0");
   if (!(so.chart_lambda >= 0) || !std::isfinite(so.chart_lambda))
     throw InputError("", "--chart-lambda must be a number >= 0");
   if (!(so.beta >= 0 && so.beta <= 1)) throw InputError("", "--beta must be in [0, 1]");
+  if (!(so.split_efficiency >= 0 && so.split_efficiency <= 1))
+    throw InputError("", "--split-efficiency must be in [0, 1]");
   if (!(so.max_geometric_l2 >= 1) || !std::isfinite(so.max_geometric_l2))
-    throw InputError("", "the geometric L2 bound of a signal atlas must be a number >= 1");
+    throw InputError("", "--max-geometric-l2 must be a number >= 1 (1 is an isometry)");
+}
+
+Atlas build_signal_atlas(const Mesh& mesh, const Signal& signal, const AtlasOptions& options,
+                         const SignalAtlasOptions& so, SignalAtlasStats* stats, const Progress& progress) {
+  validate_options(options);
+  validate_signal_options(so);
   auto t0 = std::chrono::steady_clock::now();
   const std::vector<Imt> imt = face_imt(mesh, signal);
   const std::vector<Imt> metric = signal_metric(mesh, imt, so.lambda);

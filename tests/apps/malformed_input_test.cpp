@@ -1010,6 +1010,14 @@ TEST_CASE("atlas says when the bounds need more charts than --max-charts, and ch
                   err) == 2);
     CHECK(read_bytes(err) == "isocharts: error: --beta goes with --signal-use full (it shapes the charts)\n");
   }
+  // Named as the option, before the mesh is loaded; and refused where no signal
+  // parameterization is built for it to bound.
+  CHECK(run_cli("atlas builtin:sphere --signal normals --max-geometric-l2 nan" + out, err) == 2);
+  CHECK(read_bytes(err) == "isocharts: error: --max-geometric-l2 must be a number >= 1 (1 is an isometry)\n");
+  CHECK(run_cli("atlas builtin:sphere --signal normals --signal-use none --max-geometric-l2 3" + out, err) ==
+        2);
+  CHECK_THAT(read_bytes(err),
+             Catch::StartsWith("isocharts: error: --max-geometric-l2 goes with --signal-use"));
   CHECK(run_cli("sae builtin:sphere --res 256 --width 100 --height 100", err) == 2);
   CHECK(read_bytes(err) == "isocharts: error: --res and --width/--height are exclusive\n");
   CHECK(run_cli("atlas builtin:sphere --signal normals --lambda -1" + out, err) == 2);

@@ -134,6 +134,9 @@ struct SignalAtlasStats {
   double seconds = 0;         ///< time spent on the signal (IMT, re-optimization, re-packing)
 };
 
+/// \throw InputError (no file) naming the option (as the CLI spells it) out of its range.
+void validate_signal_options(const SignalAtlasOptions& options);
+
 /// Builds an atlas whose charts (Full) and parameterizations (Param, Full) adapt to `signal`
 /// (Iso-charts §7), then packs charts with texture area in proportion to their signal-weighted
 /// size: each chart's UV area ∝ sqrt(E·A_uv), E its energy Σ A·tr(JᵀGJ), which minimizes the
