@@ -22,6 +22,16 @@ using Clock = std::chrono::steady_clock;
 
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// A face with two corners at one point: what reconstruct's join of coincident samples acts on.
+bool has_collapsed_edge(const isochart::Mesh& m) {
+  for (const isochart::Face& f : m.faces)
+    for (int k = 0; k < 3; ++k) {
+      const auto &p = m.positions[f[k]], &q = m.positions[f[(k + 1) % 3]];
+      if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2]) return true;
+    }
+  return false;
+}
+
 void check_options(const LevelOptions& o) {
   auto bad = [](const std::string& msg) { throw isochart::InputError("", msg); };
   if (o.width < 2 || o.width > 16384 || o.height < 2 || o.height > 16384)
@@ -143,8 +153,9 @@ Level build_once(const detail::AtlasCharts& a, const LevelOptions& o, const std:
     t0 = Clock::now();
     detail::optimize_samples(a, pl, sm.param, o, lv.image, lv.remesh, progress);
     // Samples the fit left on one point are joined now (none, mostly: the fit moves them
-    // apart, which joining them first would have prevented).
-    lv.remesh = reconstruct(lv.image);
+    // apart, which joining them first would have prevented). Only an edge between two
+    // such samples calls for a join; without one the rebuild would give the same remesh.
+    if (has_collapsed_edge(lv.remesh.mesh)) lv.remesh = reconstruct(lv.image);
     st.seconds_optimization = since(t0);
   }
   st.defined_samples = lv.image.defined_samples();
