@@ -1,7 +1,10 @@
 // Tests of the synth module: exemplar input and pyramid, neighbourhood taps across seams,
 // determinism over thread counts, quality figures, and the CLI's error handling.
 
+#include "synth/synth.h"
+
 #include <sys/wait.h>
+#include <tbb/global_control.h>
 #include <unistd.h>
 
 #include <catch2/catch.hpp>
@@ -11,14 +14,13 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
-#include <tbb/global_control.h>
+#include <set>
 
 #include "isochart/error.h"
 #include "isochart/image.h"
 #include "mcgim/mcgim.h"
 #include "mcgim/synthetic_atlases.h"
 #include "synth/exemplar.h"
-#include "synth/synth.h"
 
 namespace fs = std::filesystem;
 using isochart::Image;
@@ -299,8 +301,16 @@ TEST_CASE("isocharts synth writes textured meshes and its report", "[synth][cli]
   // The default exemplar (procedural bricks: rows across the image) starts at the finest level.
   CHECK(j["start_level"] == 0);
   CHECK(j["direction_symmetry"] == 2);
-  for (const char* f : {"s.glb", "s.obj", "s.mtl", "s.png", "s_mcgim.glb", "s_mcgim.obj", "s_mcgim.png"})
-    CHECK(fs::exists(tmp / f));
+  // The report lists every file written, and nothing else.
+  std::set<std::string> listed, written;
+  for (const auto& f : j["outputs"]) listed.insert(fs::path(f.get<std::string>()).filename().string());
+  for (const auto& e : fs::directory_iterator(tmp.dir))
+    if (e.path().filename() != "stdout.txt" && e.path().filename() != "stderr.txt")
+      written.insert(e.path().filename().string());
+  CHECK(listed == written);
+  for (const char* f :
+       {"s.glb", "s.obj", "s.mtl", "s.png", "s_mcgim.glb", "s_mcgim.obj", "s_mcgim.mtl", "s_mcgim.png"})
+    CHECK(listed.count(f) == 1);
   const Image tex = isochart::read_image(tmp / "s.png");
   CHECK(tex.width == 128);
   CHECK(tmp.run("exemplar bricks --size 32 -o " + tmp / "b.png") == 0);
