@@ -46,6 +46,8 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   const auto t0 = std::chrono::steady_clock::now();
   // An option that would be silently ignored is more likely a mistake than a wish.
   if (a.given.has("--png-size") && a.png.empty()) bad_option("--png-size goes with --png");
+  if (a.given.has("--alpha") && a.no_graph_cut)
+    bad_option("--alpha weighs the graph cut; --no-graph-cut skips it");
   if (a.signal.empty())
     for (const char* name : kSignalOptions)
       if (a.given.has(name)) bad_option(std::string(name) + " goes with --signal");
@@ -158,7 +160,8 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     chart_l2 = std::max(chart_l2, c.l2);
     chart_linf = std::max(chart_linf, c.linf);
   }
-  const bool per_chart = !a.signal.empty();
+  // --signal-use none packs geometrically: one texture, measured as such.
+  const bool per_chart = !a.signal.empty() && use != isochart::SignalUse::None;
   const double l2_measured = per_chart ? chart_l2 : s.l2, linf_measured = per_chart ? chart_linf : s.linf;
   const bool bounds_met = l2_measured <= l2_bound * isochart::kStretchBoundSlack &&
                           linf_measured <= a.options.max_linf * isochart::kStretchBoundSlack &&
@@ -169,7 +172,8 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     ctx.warn(a.input, "the atlas needs " + std::to_string(s.charts) + " charts, more than --max-charts " +
                           std::to_string(a.options.max_charts) +
                           " (--max-charts only adds charts): its pieces must be cut into disks that meet the "
-                          "stretch bounds; higher --max-l2 or --max-linf can make fewer");
+                          "stretch bounds, and only charts of at most a tenth of the faces are merged back "
+                          "(§6); higher --max-l2 or --max-linf may make fewer");
   if (!bounds_met) {
     std::ostringstream w;
     w << "the atlas misses its bounds (" << (per_chart ? "its charts' " : "") << "L2 " << l2_measured
@@ -230,7 +234,11 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
 
   nlohmann::json j;
   j["file"] = a.input;
-  j["outputs"] = a.outputs;
+  // Every file written, the side outputs too (they also keep their own keys).
+  std::vector<std::string> written = a.outputs;
+  for (const std::string* side : {&a.png, &a.signal_texture_out, &a.imt_out})
+    if (!side->empty()) written.push_back(*side);
+  j["outputs"] = written;
   if (!a.png.empty()) j["png"] = a.png;
   j["faces"] = in.mesh.num_faces();
   j["charts"] = s.charts;
@@ -301,8 +309,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   if (!a.signal.empty())
     t << "  signal " << a.signal << " (" << a.signal_use << "): signal stretch " << sig_stats.signal_stretch
       << ", SAE " << sae.sae << " at " << sae_w << "x" << sae_h << "\n";
-  for (const auto& out : a.outputs) t << "  wrote " << out << "\n";
-  if (!a.png.empty()) t << "  wrote " << a.png << "\n";
+  for (const auto& out : written) t << "  wrote " << out << "\n";
   ctx.emit(j, t.str());
 }
 
@@ -372,7 +379,7 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
                   "Write the signal baked into the atlas at the SAE's size (normals as 0.5n+0.5)");
   sub->footer("Example: isocharts atlas builtin:creature -o creature_atlas.obj --png creature_atlas.png");
   sub->callback([&ctx, args, sub, &action] {
-    args->given.record(sub, {"--png-size"});
+    args->given.record(sub, {"--png-size", "--alpha"});
     args->given.record(sub, kSignalOptions);
     action = [&ctx, args] { run_atlas(ctx, *args); };
   });

@@ -1018,6 +1018,17 @@ TEST_CASE("atlas says when the bounds need more charts than --max-charts, and ch
         2);
   CHECK_THAT(read_bytes(err),
              Catch::StartsWith("isocharts: error: --max-geometric-l2 goes with --signal-use"));
+  CHECK(run_cli("atlas builtin:sphere --no-graph-cut --alpha 0.3" + out, err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("--alpha weighs the graph cut"));
+  // A geometric atlas measured against a signal: one texture, packed geometrically; the report
+  // lists every file written.
+  const fs::path report = tmp.path / "r.json", png = tmp.path / "p.png", imt = tmp.path / "i.imt";
+  REQUIRE(run_cli("--report '" + report.string() +
+                      "' atlas builtin:sphere --signal normals --signal-use none" + out + " --png '" +
+                      png.string() + "' --imt-out '" + imt.string() + "'",
+                  err) == 0);
+  const nlohmann::json r = nlohmann::json::parse(read_bytes(report));
+  CHECK(r["outputs"] == nlohmann::json::array({(tmp.path / "a.obj").string(), png.string(), imt.string()}));
   CHECK(run_cli("sae builtin:sphere --res 256 --width 100 --height 100", err) == 2);
   CHECK(read_bytes(err) == "isocharts: error: --res and --width/--height are exclusive\n");
   CHECK(run_cli("atlas builtin:sphere --signal normals --lambda -1" + out, err) == 2);
