@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <initializer_list>
@@ -18,6 +19,7 @@
 #include "isochart/error.h"
 #include "isochart/io.h"
 #include "isochart/progress.h"
+#include "isochart/signal.h"
 #include "isochart/stretch.h"
 
 namespace cli {
@@ -219,6 +221,17 @@ inline void check_signal_uvs(const std::string& signal, const isochart::LoadResu
 /// The image of a `texture:IMG` signal (an input of the run), else "".
 inline std::string signal_texture(const std::string& signal) {
   return signal.rfind("texture:", 0) == 0 ? signal.substr(8) : std::string();
+}
+
+/// Alpha is dropped from a texture signal; where the image has transparent texels their
+/// stored colour (often arbitrary) becomes signal, which the user should hear about.
+inline void warn_transparent_signal(const Context& ctx, const std::string& spec, const isochart::Signal& s) {
+  if (s.transparent_texels == 0) return;
+  const double share = 100.0 * s.transparent_texels / (double(s.texture.width) * s.texture.height);
+  ctx.warn(signal_texture(spec), std::to_string(s.transparent_texels) + " texels (" +
+                                     plain_number(std::round(share * 10) / 10) +
+                                     " %) are not opaque; alpha is not part of the signal, so their stored "
+                                     "colour counts as it is");
 }
 
 /// Seconds since `t0`.

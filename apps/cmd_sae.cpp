@@ -187,9 +187,11 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
       }
     }
     signal = isochart::make_signal(ordered, a.signal, a.source);
+    warn_transparent_signal(ctx, a.signal, signal);
   } else {
     check_signal_uvs(a.signal, loaded, a.input);
     signal = isochart::make_signal(mesh, a.signal, a.input);
+    warn_transparent_signal(ctx, a.signal, signal);
   }
   isochart::Image baked;
   const isochart::SaeResult r = isochart::signal_approximation_error(mesh, signal, width, height, &baked);

@@ -121,9 +121,21 @@ Signal make_signal(const Mesh& mesh, const std::string& spec, const std::string&
       throw InputError(file,
                        "--signal " + spec + ": mesh has no texture coordinates to map the texture with");
     s.texture = read_image(path);
-    // Alpha is not part of the signal.
-    s.dimension =
-        s.texture.channels == 2 || s.texture.channels == 4 ? s.texture.channels - 1 : s.texture.channels;
+    // Alpha is not part of the signal: dropped, wherever it is (EXR channels go by name, so
+    // an "R,G" image keeps both).
+    const int alpha = s.texture.alpha_channel();
+    if (alpha >= 0) {
+      const Image& in = s.texture;
+      Image colour(in.width, in.height, in.channels - 1);
+      for (int y = 0; y < in.height; ++y)
+        for (int x = 0; x < in.width; ++x) {
+          s.transparent_texels += in.at(x, y, alpha) >= 0.999f ? 0 : 1;
+          for (int c = 0, k = 0; c < in.channels; ++c)
+            if (c != alpha) colour.at(x, y, k++) = in.at(x, y, c);
+        }
+      s.texture = std::move(colour);
+    }
+    s.dimension = s.texture.channels;
     if (s.dimension > 16) throw InputError(path, "image has more than 16 channels");
     s.uvs = mesh.uvs;
     s.face_uvs = mesh.face_uvs;

@@ -589,6 +589,37 @@ TEST_CASE("a texture signal repeats where the texture coordinates leave the unit
   std::filesystem::remove(png);
 }
 
+TEST_CASE("a texture signal drops alpha wherever it is and counts transparent texels", "[signal]") {
+  const std::string base =
+      (std::filesystem::temp_directory_path() / ("isocharts_alpha_" + std::to_string(::getpid()))).string();
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.faces = {{0, 1, 2}};
+  m.face_uvs = m.faces;
+  m.uvs = {{0, 0}, {1, 0}, {0, 1}};
+  // RGBA, half of it transparent: the colour is the signal, as stored.
+  Image rgba(4, 4, 4, 0.25f);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) rgba.at(x, y, 3) = x < 2 ? 0.0f : 1.0f;
+  write_image(base + ".png", rgba);
+  const Signal s = make_signal(m, "texture:" + base + ".png");
+  CHECK(s.dimension == 3);
+  CHECK(s.texture.channels == 3);
+  CHECK(s.transparent_texels == 8);
+  double v[3];
+  s.evaluate(m, 0, 0.1, 0.1, v);
+  CHECK(v[0] == Approx(0.25).epsilon(0.01));
+  // Two channels named R and G are two signal channels, not grey and alpha.
+  Image rg(4, 4, 2, 0.5f);
+  rg.channel_names = {"R", "G"};
+  write_image(base + ".exr", rg);
+  const Signal t = make_signal(m, "texture:" + base + ".exr");
+  CHECK(t.dimension == 2);
+  CHECK(t.transparent_texels == 0);
+  std::filesystem::remove(base + ".png");
+  std::filesystem::remove(base + ".exr");
+}
+
 TEST_CASE("a mapped texture signal bakes back to itself through its own atlas", "[signal]") {
   // The plane's atlas is the texture's own mapping, so the SAE only sees resampling.
   Mesh m = plane(8);

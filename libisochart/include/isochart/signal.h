@@ -27,6 +27,9 @@ struct Signal {
   /// mapped: some texture coordinates leave [0, 1]², so the texture repeats (as `render` and
   /// the glTF sampler read it); otherwise it is clamped at its borders.
   bool tiling = false;
+  /// mapped: texels of the image that were not opaque (alpha < 0.999). Alpha is not part of
+  /// the signal (it is dropped from `texture`), so their colour counts as it is stored.
+  long long transparent_texels = 0;
 
   bool is_mapped() const { return !texture.empty(); }
   /// The signal at barycentric point (1 − b1 − b2, b1, b2) of face f, `dimension` values.
