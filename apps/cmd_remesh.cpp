@@ -108,6 +108,21 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
       bad_option(option + " takes a file name prefix (e.g. " +
                  (std::filesystem::path(prefix) / "gim").string() + " for gim_256x256" +
                  (option == "--png" ? ".png" : ".exr") + "), not the directory '" + prefix + "'");
+    // A prefix ending in another file type's extension (--exr e.png) is more likely a
+    // mistake than a wish for e.png_64x64.exr.
+    const std::string own = option == "--png" ? "png" : "exr";
+    const std::string name = std::filesystem::path(prefix).filename().string();
+    const auto dot = name.find_last_of('.');
+    if (dot != std::string::npos && dot > 0) {
+      std::string ext = name.substr(dot + 1);
+      for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      for (const char* other : {"png", "exr", "jpg", "jpeg", "tif", "tiff", "hdr", "bmp", "tga", "obj", "ply",
+                                "off", "glb", "gltf", "json"})
+        if (ext == other && ext != own)
+          bad_option(option + " " + prefix + ": the prefix ends in ." + ext + ", so the files would be " +
+                     prefix + "_WxH." + own + "; give a prefix such as " +
+                     prefix.substr(0, prefix.size() - ext.size() - 1) + " (or one ending in ." + own + ")");
+    }
   }
   {
     // Outputs whose sizes are known now (not those of --samples, checked when written).

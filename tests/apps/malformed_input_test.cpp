@@ -645,6 +645,16 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   const std::string largest = large.substr(at + 21, large.find(' ', at + 21) - at - 21);
   CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --scale " + largest,
                 err) == 0);
+  // An exemplar too large to search at the scale asked for: the error names it and the option.
+  const fs::path big = tmp.path / "big.png";
+  isochart::Image noise_image(1100, 1100, 3);
+  for (std::size_t i = 0; i < noise_image.pixels.size(); ++i) noise_image.pixels[i] = float((i * 7919) % 256) / 255;
+  isochart::write_image(big.string(), noise_image);
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --exemplar '" +
+                    big.string() + "' --pixels-per-texel 1",
+                err) == 2);
+  CHECK_THAT(line(), Catch::StartsWith("isocharts: error: " + big.string() +
+                                       ": --pixels-per-texel 1: exemplar too large at this scale"));
   // The largest seed is a seed.
   CHECK(run_cli("-q info builtin:sphere --seed 18446744073709551615", err) == 0);
 }
@@ -1387,5 +1397,10 @@ TEST_CASE("directories, '-' and image prefixes with an extension are named for w
                                     Catch::Contains("not the directory '" + dir + "'"));
   }
   CHECK(!fs::exists(tmp.path / "_32x32.exr"));
+  // A prefix with another type's extension wrote e.png_32x32.exr.
+  CHECK(run_cli("-q remesh builtin:sphere --res 32 --no-psnr -o '" + (tmp.path / "r2.ply").string() + "' --exr '" +
+                    (tmp.path / "e.png").string() + "'",
+                err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("the prefix ends in .png"));
   CHECK(!fs::exists(tmp.path / "r2.ply"));
 }
