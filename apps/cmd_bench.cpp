@@ -836,7 +836,13 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   {
     std::error_code ec;
     fs::create_directories(a.out, ec);
-    if (!fs::is_directory(a.out, ec)) throw isochart::InputError(a.out, "cannot create the output directory");
+    std::error_code kind;
+    if (!fs::is_directory(a.out, kind)) {
+      if (fs::exists(a.out, kind))
+        throw isochart::InputError(a.out, "--out takes a directory (for bench.md, bench.csv and the plots); this is a file");
+      throw isochart::InputError(a.out, "cannot create the output directory" +
+                                            (ec ? ": " + ec.message() : std::string()));
+    }
     const fs::path out(a.out);
     ctx.check_paths(
         {}, {(out / "bench.md").string(), (out / "bench.csv").string(), (out / "sweep.csv").string()});
@@ -962,7 +968,10 @@ void add_bench(CLI::App& app, Context& ctx, Action& action) {
                   "Width / height of the texture the external atlases were laid out for (default: "
                   "read from each one's UVs)")
       ->check(number_in(1.0 / 16384, 16384.0));
-  sub->add_option("--pack-res", args->pack_res, "Texture size for the packing-ratio column")->capture_default_str();
+  sub->add_option("--pack-res", args->pack_res,
+                  "Texture size (square) the built atlases are packed for, gutters in its texels; the packing-ratio "
+                  "column, and the layout the geometry images resample, follow from it")
+      ->capture_default_str();
   sub->add_option("--psnr-samples", args->psnr_samples, "Points per surface for the PSNR")
       ->check(CLI::Range(1000LL, 20'000'000LL))
       ->capture_default_str();

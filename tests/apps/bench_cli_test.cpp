@@ -337,6 +337,9 @@ TEST_CASE("bench: bad inputs are one line and exit code 2", "[bench]") {
     CHECK(e.find(c.expect) != std::string::npos);
   }
   CHECK(!fs::exists(dir / "out"));
+  // --out naming a file said only that the directory could not be created.
+  CHECK(run_cli("bench builtin:sphere --methods lscm --sweep none --out '" + bad.string() + "'", err) == 2);
+  CHECK_THAT(slurp(err), Catch::Contains("--out takes a directory") && Catch::Contains("this is a file"));
 }
 
 TEST_CASE("bench: equal PSNR is a tie, not a win for lscm", "[bench]") {
