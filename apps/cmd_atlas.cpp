@@ -326,16 +326,25 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
   // The layout is drawn at 2×2 samples per pixel, at most 2^25 samples in all.
   sub->add_option("--png-size", args->png_size, "Size of the layout PNG in pixels (at most 2896)")
       ->check(CLI::Range(16, 2896));
-  sub->add_option("--max-l2", o.max_l2, "Bound on every chart's L2 stretch (1 = isometric)")->capture_default_str();
-  sub->add_option("--max-linf", o.max_linf, "Bound on every chart's Linf stretch, shrink included")->capture_default_str();
+  sub->add_option("--max-l2", o.max_l2, "Bound on every chart's L2 stretch (at least 1; 1 = isometric)")
+      ->capture_default_str();
+  sub->add_option("--max-linf", o.max_linf,
+                  "Bound on every chart's Linf stretch, shrink included (at least 1)")
+      ->capture_default_str();
   sub->add_option(
          "--max-charts", o.max_charts,
          "0: as few charts as the bounds allow; N: split further until N charts (never fewer than the "
          "bounds and disk-shaped charts need)")
       ->capture_default_str();
-  sub->add_option("--width", o.pack.width, "Texture width in texels (packing)")->capture_default_str();
-  sub->add_option("--height", o.pack.height, "Texture height in texels (packing)")->capture_default_str();
-  sub->add_option("--gutter", o.pack.gutter, "Empty texels between charts")->capture_default_str();
+  sub->add_option(
+         "--width", o.pack.width,
+         "Texture width in texels (packing; 8 to " + std::to_string(isochart::PackOptions::kMaxSize) + ")")
+      ->capture_default_str();
+  sub->add_option(
+         "--height", o.pack.height,
+         "Texture height in texels (packing; 8 to " + std::to_string(isochart::PackOptions::kMaxSize) + ")")
+      ->capture_default_str();
+  sub->add_option("--gutter", o.pack.gutter, "Empty texels between charts (0 to 64)")->capture_default_str();
   sub->add_option("--pack-cuts", o.pack_cuts,
                   "Extra charts cut off poorly shaped ones when that packs tighter (-1: automatic, under 12 "
                   "charts; 0: none)")

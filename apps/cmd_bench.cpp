@@ -954,8 +954,9 @@ void add_bench(CLI::App& app, Context& ctx, Action& action) {
                   "Comma-separated: isochart, isomap-nocut, lscm, lscm+stretch, external (DATA/baseline_atlases/"
                   "MESH_*.obj), external:FILE.obj")
       ->capture_default_str();
-  sub->add_option("--res", args->res,
-                  "Square MCGIM resolution of the first method; the others get its defined samples (±2%)")
+  sub->add_option(
+         "--res", args->res,
+         "Square MCGIM resolution of the first method (8 to 2048); the others get its defined samples (±2%)")
       ->capture_default_str();
   sub->add_option("--out", args->out,
                   "Output directory (bench.md, bench.csv, sweep.csv, PNG plots; an earlier run's plots there "
@@ -969,7 +970,8 @@ void add_bench(CLI::App& app, Context& ctx, Action& action) {
                   "read from each one's UVs)")
       ->check(number_in(1.0 / 16384, 16384.0));
   sub->add_option("--pack-res", args->pack_res,
-                  "Texture size (square) the built atlases are packed for, gutters in its texels; the packing-ratio "
+                  "Texture size (square, 64 to 8192) the built atlases are packed for, gutters in its "
+                  "texels; the packing-ratio "
                   "column, and the layout the geometry images resample, follow from it")
       ->capture_default_str();
   sub->add_option("--psnr-samples", args->psnr_samples, "Points per surface for the PSNR")
