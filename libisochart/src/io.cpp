@@ -300,10 +300,6 @@ long long count_coincident(const RawMesh& raw) {
   return n;
 }
 
-}  // namespace
-
-namespace {
-
 // Repairs that only joining vertices at one position can call for.
 bool needs_surface_repair(const ValidationReport& r) {
   return r.nonmanifold_edges > 0 || r.nonmanifold_vertices > 0 || r.cut_edges > 0;
