@@ -864,7 +864,14 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   const std::string md = to_markdown(bench.rows(), bench.sweep_points(), a);
   const fs::path out(a.out);
   isochart::write_file_atomic((out / "bench.csv").string(), to_csv(bench.rows()));
-  isochart::write_file_atomic((out / "sweep.csv").string(), sweep_csv(bench.sweep_points()));
+  // Without a sweep there is no sweep.csv; an earlier run's would be taken for this run's.
+  const bool swept_any = !a.sweep.empty();
+  if (swept_any) {
+    isochart::write_file_atomic((out / "sweep.csv").string(), sweep_csv(bench.sweep_points()));
+  } else {
+    std::error_code ec;
+    fs::remove(out / "sweep.csv", ec);
+  }
   std::vector<std::string> plots;
   if (!a.no_plots) {
     isochart::write_image((out / "psnr.png").string(), plot_psnr(bench.rows()));
@@ -898,9 +905,11 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   // Rows missing without a word read as if the other tools had not been compared there.
   std::string skipped;
   for (const auto& m : bench.without_baselines()) skipped += (skipped.empty() ? "" : ", ") + m;
-  if (!skipped.empty())
-    doc << "\nNo `external` rows for " << skipped << ": no baseline atlases in "
-        << (fs::path(a.data) / "baseline_atlases").string() << ".\n";
+  const std::string skipped_note = skipped.empty()
+                                       ? ""
+                                       : "\nNo `external` rows for " + skipped + ": no baseline atlases in " +
+                                             (fs::path(a.data) / "baseline_atlases").string() + ".\n";
+  doc << skipped_note;
   for (const auto& p : plots) doc << "\n![" << p << "](" << p << ")\n";
   isochart::write_file_atomic((out / "bench.md").string(), doc.str());
 
@@ -937,7 +946,8 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   j["out"] = a.out;
   j["seconds"] = total;
   j["seed"] = ctx.opts.seed;
-  ctx.emit(j, md + "\nWrote " + (out / "bench.md").string() + ", bench.csv, sweep.csv" +
+  ctx.emit(j, md + skipped_note + "\nWrote " + (out / "bench.md").string() + ", bench.csv" +
+                  (swept_any ? ", sweep.csv" : "") +
                   (plots.empty() ? "" : " and " + std::to_string(plots.size()) + " plots") + "\n");
 }
 

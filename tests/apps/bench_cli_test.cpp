@@ -269,7 +269,9 @@ TEST_CASE("bench: only external methods and no baseline atlas for the mesh: an n
   CHECK(rows[0].at("method") == "external");
   CHECK(rows[0].at("note").rfind("n/a: no baseline atlas ", 0) == 0);
   CHECK(rows[0].at("note").find("sphere_*.obj") != std::string::npos);
-  // Among other methods the row is left out, but bench.md says so (it did not).
+  // Among other methods the row is left out, but bench.md says so (it did not). Without a
+  // sweep no sweep.csv is written, and an earlier run's is not left to be taken for this one's.
+  std::ofstream(out / "sweep.csv") << "mesh,method,bound,charts,l2\n";
   REQUIRE(run_cli("bench builtin:sphere --methods isochart,external --data '" + (dir / "data").string() +
                       "' --res 16 --sweep none --no-plots --out '" + out.string() + "'",
                   err) == 0);
@@ -277,6 +279,7 @@ TEST_CASE("bench: only external methods and no baseline atlas for the mesh: an n
   std::ifstream md(out / "bench.md");
   const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
   CHECK_THAT(text, Catch::Contains("No `external` rows for sphere: no baseline atlases in"));
+  CHECK(!fs::exists(out / "sweep.csv"));
 }
 
 TEST_CASE("bench: plots of an earlier run into the same directory are removed", "[bench]") {
