@@ -361,6 +361,10 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
       << (s.topology.manifold() ? "manifold" : "NOT manifold") << ", euler " << s.topology.euler_characteristic
       << (s.topology.euler_characteristic == s.input_euler_characteristic ? "" : " (input " + std::to_string(s.input_euler_characteristic) + ")");
     if (!a.no_psnr) t << ", PSNR " << std::fixed << std::setprecision(2) << d.psnr << " dB" << std::defaultfloat;
+    // Not a warning: small charts contracted at coarse levels are how a MCGIM coarsens (their
+    // surface stays within 3 texels, else lost_charts warns), but features go with them.
+    if (s.empty_charts > 0)
+      t << ", " << s.empty_charts << (s.empty_charts == 1 ? " chart" : " charts") << " without samples";
     t << " -> " << out;
     for (const std::string& image : images) t << ", " << image;
     t << "\n";
