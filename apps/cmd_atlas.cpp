@@ -322,7 +322,8 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
   CLI::App* sub = app.add_subcommand("atlas", "Build a stretch-bounded iso-chart texture atlas");
   sub->add_option("input", args->input, "Mesh file (OBJ/OFF/PLY/glTF) or builtin:NAME")->required();
   sub->add_option("-o,--output", args->outputs, "Output mesh with UVs (.obj, .glb, .ply); repeat for several");
-  sub->add_option("--png", args->png, "Also draw the chart layout into this PNG");
+  sub->add_option("--png", args->png,
+                  "Also draw the chart layout into this image (PNG; JPG, TIFF, EXR, ... by extension)");
   // The layout is drawn at 2×2 samples per pixel, at most 2^25 samples in all.
   sub->add_option("--png-size", args->png_size, "Size of the layout PNG in pixels (at most 2896)")
       ->check(CLI::Range(16, 2896));
@@ -349,7 +350,10 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
                   "Extra charts cut off poorly shaped ones when that packs tighter (-1: automatic, under 12 "
                   "charts; 0: none)")
       ->capture_default_str();
-  sub->add_option("--landmarks", o.landmarks, "Landmarks per chart for the IsoMap embedding")->capture_default_str();
+  sub->add_option("--landmarks", o.landmarks,
+                  "IsoMap landmarks of a whole component (at least 3); a sub-chart gets its share by "
+                  "vertices, at least 25")
+      ->capture_default_str();
   sub->add_option("--alpha", o.alpha, "Graph-cut weight of dihedral angle vs. embedding distortion")->capture_default_str();
   sub->add_flag("--no-graph-cut", args->no_graph_cut, "Skip graph-cut boundary optimization (ablation)");
   sub->add_flag("--no-merge", args->no_merge, "Skip merging small charts");

@@ -153,8 +153,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
   const auto ta = std::chrono::steady_clock::now();
   if (!a.atlas.empty()) {
     atlas = load_any(ctx, a.atlas, true).mesh;
-    if (!atlas.has_uvs())
-      throw isochart::InputError(a.atlas, "the atlas has no texture coordinates (vt)");
+    if (!atlas.has_uvs()) throw isochart::InputError(a.atlas, "the atlas has no texture coordinates");
     check_atlas_matches(input, atlas, a.atlas);
     // Read here once, said, and handed to the remesh (which would otherwise read it again).
     if (a.atlas_aspect == 0)

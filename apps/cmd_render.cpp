@@ -162,7 +162,8 @@ void run_render(const Context& ctx, const RenderArgs& a) {
           own = "embedded";
         }
       } catch (const isochart::InputError& e) {
-        ctx.warn(a.input, std::string("its texture cannot be read (") + e.what() + "); drawn shaded");
+        const std::string which = e.file().empty() || e.file() == a.input ? "" : " " + e.file();
+        ctx.warn(a.input, "its texture" + which + " cannot be read (" + e.what() + "); drawn shaded");
         texture = isochart::Image{};
         own.clear();
       }

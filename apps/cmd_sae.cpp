@@ -50,7 +50,7 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   const isochart::LoadResult loaded = ctx.load(a.input, true);
   const isochart::Mesh& mesh = loaded.mesh;
   if (!mesh.has_uvs())
-    throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
+    throw isochart::InputError(a.input, "mesh has no texture coordinates; nothing to measure");
   {
     // The SAE bakes the signal into one texture through the UVs: where they leave it, overlap
     // or collapse, texels are shared or clamped and the figure says little about the atlas.

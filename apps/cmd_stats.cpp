@@ -24,7 +24,7 @@ void run_stats(const Context& ctx, const StatsArgs& a) {
   ctx.check_paths({a.input}, {});
   isochart::LoadResult r = ctx.load(a.input, true);
   if (!r.mesh.has_uvs())
-    throw isochart::InputError(a.input, "mesh has no texture coordinates (vt); nothing to measure");
+    throw isochart::InputError(a.input, "mesh has no texture coordinates; nothing to measure");
   const isochart::AtlasQuality q = isochart::measure_atlas(r.mesh, a.aspect);
   const int turned = q.stretch.flipped - q.stretch.degenerate;
   // The packing ratio is measured against the UVs' own bounding box: it says nothing of a

@@ -400,7 +400,7 @@ void optimize_atlas_stretch(const Mesh& mesh, Atlas& atlas, const OptimizeOption
 }
 
 Atlas atlas_from_uvs(const Mesh& mesh, double texture_aspect) {
-  if (!mesh.has_uvs()) throw InputError("", "the atlas has no texture coordinates (vt)");
+  if (!mesh.has_uvs()) throw InputError("", "the atlas has no texture coordinates");
   int nc = 0;
   const std::vector<int> chart = uv_charts(mesh, nc);
   Atlas atlas;

@@ -529,14 +529,14 @@ ChartDensity sparsest_of(const Mesh& mesh, const std::vector<int>& chart, int nu
 }  // namespace
 
 ChartDensity sparsest_chart(const Mesh& mesh) {
-  if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates (vt)");
+  if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates");
   int n = 0;
   const std::vector<int> chart = uv_charts(mesh, n);
   return sparsest_of(mesh, chart, n);
 }
 
 AtlasQuality measure_atlas(const Mesh& mesh, double texture_aspect) {
-  if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates (vt)");
+  if (!mesh.has_uvs()) throw InputError("", "mesh has no texture coordinates");
   AtlasQuality q;
   const Topology topo(mesh);
   const std::vector<int> chart = uv_charts(mesh, topo, q.charts);

@@ -473,7 +473,8 @@ TEST_CASE("render draws the texture a mesh file carries or names, unless --shade
   fs::remove(tmp.path / "s.png");
   j = render("s.obj", "", "missing.png");
   CHECK(j["mode"] == "shaded");
-  CHECK_THAT(read_bytes(err), Catch::Contains("s.obj: its texture cannot be read"));
+  CHECK_THAT(read_bytes(err), Catch::Contains("s.obj: its texture " + (tmp.path / "s.png").string() +
+                                              " cannot be read (image file not found)"));
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "x.png").string() + "' --shaded --charts", err) ==
         2);
   CHECK_THAT(read_bytes(err), Catch::Contains("--charts, --shaded and --texture are exclusive"));
