@@ -305,6 +305,13 @@ bool needs_surface_repair(const ValidationReport& r) {
   return r.nonmanifold_edges > 0 || r.nonmanifold_vertices > 0 || r.cut_edges > 0;
 }
 
+// Whether a repairing validation changed anything, i.e. whether the same input would be
+// refused without repair.
+bool repaired_anything(const ValidationReport& r) {
+  return needs_surface_repair(r) || r.polygons > 0 || r.degenerate_faces > 0 || r.duplicate_faces > 0 ||
+         r.double_sided_faces > 0 || r.unreferenced_vertices > 0 || r.reoriented_faces > 0;
+}
+
 }  // namespace
 
 LoadResult load_mesh(const std::string& path, const LoadOptions& options) {
@@ -345,8 +352,9 @@ LoadResult load_mesh(const std::string& path, const LoadOptions& options) {
     io_detail::weld_equal_positions(joined);
     if (split_double_sided(joined, split) > 0) coincident = count_coincident(split);
   }
-  // Without repair, the same validation refuses the file, naming its first problem.
-  if (!validated || !options.repair) {
+  // Without repair, validation refuses the file, naming its first problem; a file that
+  // needed nothing validates to the mesh already in hand.
+  if (!validated || (!options.repair && repaired_anything(r.report))) {
     r.report = ValidationReport{};
     r.mesh = validate_mesh(raw, options.repair, r.report);
   }
