@@ -173,17 +173,14 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   synth::SynthResult r;
   try {
     r = synth::synthesize(atlas, pyramid, exemplar, so, ctx.progress());
-  } catch (const isochart::InputError& e) {
+  } catch (const synth::ScaleError& e) {
     // The library's scale limits depend on the built pyramid; name the option that set the
     // scale, and for the exemplar's size, the exemplar.
-    const std::string what = e.what();
-    const bool too_large = what.rfind("exemplar too large", 0) == 0;
-    if (!e.file().empty() || (what.rfind("exemplar scale", 0) != 0 && !too_large)) throw;
     std::ostringstream opt;
     if (a.pixels_per_texel > 0) opt << "--pixels-per-texel " << a.pixels_per_texel << ": ";
     else if (a.scale > 0) opt << "--scale " << a.scale << ": ";
-    if (too_large) throw isochart::InputError(a.exemplar, opt.str() + what);
-    bad_option(opt.str() + what);
+    if (e.exemplar_size()) throw isochart::InputError(a.exemplar, opt.str() + e.what());
+    bad_option(opt.str() + e.what());
   }
   if (a.start_level >= 0 && r.start_level != a.start_level)
     ctx.warn(a.input, "--start-level " + std::to_string(a.start_level) + ": started at level " +

@@ -594,8 +594,8 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
   // Each limit on the scale below moves the default scale to the limit, and refuses a scale the
   // user asked for, saying why and what works.
   const bool default_scale = o.scale <= 0 && o.pixels_per_texel <= 0;
-  const auto move_or_refuse = [&](double limit, const std::string& why) {
-    if (!default_scale) throw isochart::InputError("", why);
+  const auto move_or_refuse = [&](double limit, const std::string& why, bool exemplar_size = false) {
+    if (!default_scale) throw ScaleError(why, exemplar_size);
     res.scale = limit;
   };
 
@@ -662,7 +662,8 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
                  "scale of at least %.4g exemplar pixels per unit length (%.4g per texel) "
                  "or a smaller exemplar",
                  exemplar.width, exemplar.height, f, f == 1 ? "" : "s", searched, searched * 1.2e3 / 1e9,
-                 kMaxSearchedPixels, round_up_4(min_scale), round_up_4(min_factor)));
+                 kMaxSearchedPixels, round_up_4(min_scale), round_up_4(min_factor)),
+          true);
     }
   }
 

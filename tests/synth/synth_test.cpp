@@ -14,6 +14,7 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <set>
 
 #include "isochart/error.h"
@@ -708,6 +709,19 @@ TEST_CASE("an exemplar too large to search at the scale asked for is refused wit
       Catch::StartsWith(
           "exemplar too large at this scale: the 1100x1100 exemplar at 1 exemplar pixel per texel") &&
           Catch::Contains("(1.075 per texel)"));
+  // The error says which limit it is (the exemplar's size here, the scale alone below), so a
+  // caller can name the right input without reading the message.
+  auto limit_is_exemplar_size = [&] {
+    try {
+      synth::synthesize(atlas, pyramid, big, so);
+    } catch (const synth::ScaleError& e) {
+      return std::optional<bool>(e.exemplar_size());
+    }
+    return std::optional<bool>();
+  };
+  CHECK(limit_is_exemplar_size() == std::optional<bool>(true));
+  so.pixels_per_texel = 0.5;  // would magnify the exemplar past its own size and the level's
+  CHECK(limit_is_exemplar_size() == std::optional<bool>(false));
   // The scale it names works.
   so.pixels_per_texel = 1.075;
   so.full_passes = 0;  // the search tree is built either way; the passes only take time

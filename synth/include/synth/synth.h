@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "isochart/error.h"
 #include "isochart/image.h"
 #include "isochart/mesh.h"
 #include "isochart/progress.h"
@@ -165,9 +166,24 @@ struct SynthResult {
   double seconds = 0;
 };
 
+/// A scale asked for (SynthOptions::scale or pixels_per_texel) that the built pyramid cannot
+/// synthesize. Its limits depend on the pyramid's texel size, so the caller learns of them only
+/// here; `exemplar_size()` says the exemplar is too large to search at that scale (a smaller
+/// exemplar would do), otherwise the scale magnifies or shrinks the exemplar too far.
+class ScaleError : public isochart::InputError {
+ public:
+  ScaleError(const std::string& message, bool exemplar_size)
+      : isochart::InputError("", message), exemplar_size_(exemplar_size) {}
+  bool exemplar_size() const { return exemplar_size_; }
+
+ private:
+  bool exemplar_size_;
+};
+
 /// Synthesizes a texture over `pyramid` (from mcgim::build_pyramid of `atlas`, finest first;
 /// one level is fine) from `exemplar` (RGB, see load_exemplar).
-/// \throw isochart::InputError for bad options or an empty pyramid; Cancelled via `progress`.
+/// \throw ScaleError for a scale out of the pyramid's range, isochart::InputError for other bad
+///        options or an empty pyramid; Cancelled via `progress`.
 SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Level>& pyramid,
                        const isochart::Image& exemplar, const SynthOptions& options = {},
                        const isochart::Progress& progress = {});
