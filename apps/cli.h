@@ -208,30 +208,33 @@ std::vector<int> parse_levels(const std::vector<std::string>& given, int lo, int
 /// `longer` pixels and its shorter at least 16.
 std::array<int, 2> layout_size(int longer, double aspect);
 
-/// A texture signal is read through the mesh's texture coordinates: faces the file gave none
-/// would all read the texel at (0, 0), a signal made up for them.
-inline void check_signal_uvs(const std::string& signal, const isochart::LoadResult& r,
-                             const std::string& file) {
-  if (signal.rfind("texture:", 0) == 0 && r.report.faces_without_uvs > 0)
-    throw isochart::InputError(file, std::to_string(r.report.faces_without_uvs) +
-                                         (r.report.faces_without_uvs == 1 ? " face has" : " faces have") +
-                                         " no texture coordinates to read --signal " + signal + " through");
-}
-
 /// The image of a `texture:IMG` signal (an input of the run), else "".
 inline std::string signal_texture(const std::string& signal) {
   return signal.rfind("texture:", 0) == 0 ? signal.substr(8) : std::string();
 }
 
-/// Alpha is dropped from a texture signal; where the image has transparent texels their
-/// stored colour (often arbitrary) becomes signal, which the user should hear about.
-inline void warn_transparent_signal(const Context& ctx, const std::string& spec, const isochart::Signal& s) {
-  if (s.transparent_texels == 0) return;
-  const double share = 100.0 * s.transparent_texels / (double(s.texture.width) * s.texture.height);
-  ctx.warn(signal_texture(spec), std::to_string(s.transparent_texels) + " texels (" +
-                                     plain_number(std::round(share * 10) / 10) +
-                                     " %) are not opaque; alpha is not part of the signal, so their stored "
-                                     "colour counts as it is");
+/// The signal `spec` on `mesh`, which was read from `file` as `loaded` (the mesh itself, or one
+/// numbered otherwise from the same load). A texture signal is read through the mesh's texture
+/// coordinates: faces the file gave none would all read the texel at (0, 0), a signal made up
+/// for them, so that is refused. Alpha is dropped from a texture signal; where the image has
+/// transparent texels their stored colour (often arbitrary) becomes signal, which the user
+/// hears about.
+inline isochart::Signal load_signal(const Context& ctx, const std::string& spec,
+                                    const isochart::LoadResult& loaded, const isochart::Mesh& mesh,
+                                    const std::string& file) {
+  const long long without = loaded.report.faces_without_uvs;
+  if (spec.rfind("texture:", 0) == 0 && without > 0)
+    throw isochart::InputError(file, std::to_string(without) + (without == 1 ? " face has" : " faces have") +
+                                         " no texture coordinates to read --signal " + spec + " through");
+  isochart::Signal s = isochart::make_signal(mesh, spec, file);
+  if (s.transparent_texels > 0) {
+    const double share = 100.0 * s.transparent_texels / (double(s.texture.width) * s.texture.height);
+    ctx.warn(signal_texture(spec), std::to_string(s.transparent_texels) + " texels (" +
+                                       plain_number(std::round(share * 10) / 10) +
+                                       " %) are not opaque; alpha is not part of the signal, so their stored "
+                                       "colour counts as it is");
+  }
+  return s;
 }
 
 /// Seconds since `t0`.

@@ -87,9 +87,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   isochart::SignalAtlasStats sig_stats;
   isochart::SaeResult sae;
   if (!a.signal.empty()) {
-    check_signal_uvs(a.signal, in, a.input);
-    signal = isochart::make_signal(in.mesh, a.signal, a.input);
-    warn_transparent_signal(ctx, a.signal, signal);
+    signal = load_signal(ctx, a.signal, in, in.mesh, a.input);
     if (!a.imt_out.empty()) isochart::write_imt(a.imt_out, isochart::face_imt(in.mesh, signal));
   } else if (!a.imt_out.empty() || !a.signal_texture_out.empty()) {
     bad_option("--imt-out and --signal-texture-out need --signal");

@@ -196,9 +196,7 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
       // the surface bends, where linear reconstruction errs most.
       isochart::SignalAtlasOptions so;
       so.use = a.signal_use == "full" ? isochart::SignalUse::Full : isochart::SignalUse::Param;
-      check_signal_uvs(a.signal, loaded, a.input);
-      const isochart::Signal signal = isochart::make_signal(input, a.signal, a.input);
-      warn_transparent_signal(ctx, a.signal, signal);
+      const isochart::Signal signal = load_signal(ctx, a.signal, loaded, input, a.input);
       isochart::SignalAtlasStats ss;
       built = isochart::build_signal_atlas(input, signal, ao, so, &ss, ctx.progress());
       atlas_json["source"] = "iso-charts, signal " + a.signal + " (" + a.signal_use + ")";

@@ -101,7 +101,6 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
   if (!a.source.empty()) {
     // Joined like the atlas, so that a source split at the same seams numbers alike.
     const isochart::LoadResult src_loaded = ctx.load(a.source, true);
-    check_signal_uvs(a.signal, src_loaded, a.source);
     const isochart::Mesh& src = src_loaded.mesh;
     if (src.num_vertices() != mesh.num_vertices() || src.num_faces() != mesh.num_faces())
       throw isochart::InputError(a.source, "has " + std::to_string(src.num_vertices()) + " vertices and " +
@@ -186,12 +185,9 @@ void run_sae(const Context& ctx, const SaeArgs& a) {
           for (int i = 0; i < 3; ++i) ordered.face_uvs[f][i] = src.face_uvs[g][(turn + i) % 3];
       }
     }
-    signal = isochart::make_signal(ordered, a.signal, a.source);
-    warn_transparent_signal(ctx, a.signal, signal);
+    signal = load_signal(ctx, a.signal, src_loaded, ordered, a.source);
   } else {
-    check_signal_uvs(a.signal, loaded, a.input);
-    signal = isochart::make_signal(mesh, a.signal, a.input);
-    warn_transparent_signal(ctx, a.signal, signal);
+    signal = load_signal(ctx, a.signal, loaded, mesh, a.input);
   }
   isochart::Image baked;
   const isochart::SaeResult r = isochart::signal_approximation_error(mesh, signal, width, height, &baked);
