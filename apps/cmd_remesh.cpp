@@ -116,12 +116,24 @@ void run_remesh(const Context& ctx, const RemeshArgs& a) {
     if (dot != std::string::npos && dot > 0) {
       std::string ext = name.substr(dot + 1);
       for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-      for (const char* other : {"png", "exr", "jpg", "jpeg", "tif", "tiff", "hdr", "bmp", "tga", "obj", "ply",
-                                "off", "glb", "gltf", "json"})
-        if (ext == other && ext != own)
-          bad_option(option + " " + prefix + ": the prefix ends in ." + ext + ", so the files would be " +
-                     prefix + "_WxH." + own + "; give a prefix such as " +
-                     prefix.substr(0, prefix.size() - ext.size() - 1) + " (or one ending in ." + own + ")");
+      // Another type is one of the formats the tool itself reads or writes (a mesh, an image,
+      // its JSON report); anything else after a dot (gim.v2) is just part of the name.
+      const auto is_format = [&](auto check) {
+        try {
+          check(prefix);
+          return true;
+        } catch (const isochart::InputError&) {
+          return false;
+        }
+      };
+      const bool other_type =
+          ext != own &&
+          (ext == "json" || is_format([](const std::string& p) { isochart::format_from_path(p); }) ||
+           is_format([](const std::string& p) { isochart::check_image_output(p); }));
+      if (other_type)
+        bad_option(option + " " + prefix + ": the prefix ends in ." + ext + ", so the files would be " +
+                   prefix + "_WxH." + own + "; give a prefix such as " +
+                   prefix.substr(0, prefix.size() - ext.size() - 1) + " (or one ending in ." + own + ")");
     }
   }
   {
