@@ -168,11 +168,13 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   if (a.options.max_charts > 0 && s.charts > a.options.max_charts)
     // Not only the bounds: every chart must be a disk, so a closed surface is split (a sphere
     // into 6 whatever the bounds), and each separate piece is a chart of its own.
-    ctx.warn(a.input, "the atlas needs " + std::to_string(s.charts) + " charts, more than --max-charts " +
-                          std::to_string(a.options.max_charts) +
-                          " (--max-charts only adds charts): its pieces must be cut into disks that meet the "
-                          "stretch bounds, and only charts of at most a tenth of the faces are merged back "
-                          "(§6); higher --max-l2 or --max-linf may make fewer");
+    ctx.warn(a.input,
+             "the atlas needs " + std::to_string(s.charts) + " charts, more than --max-charts " +
+                 std::to_string(a.options.max_charts) +
+                 " (--max-charts only adds charts): its pieces must be cut into disks that meet the "
+                 "stretch bounds, and only charts of at most " +
+                 plain_number(100 * a.options.merge_max_fraction) +
+                 " % of the faces are merged back (§6); higher --max-l2 or --max-linf may make fewer");
   if (!bounds_met) {
     std::ostringstream w;
     w << "the atlas misses its bounds (" << (per_chart ? "its charts' " : "") << "L2 " << l2_measured
