@@ -241,8 +241,8 @@ void run_synth(const Context& ctx, const SynthArgs& a) {
   nlohmann::json j;
   j["input"] = a.input;
   j["exemplar"] = a.exemplar;
-  // save_mesh names each OBJ's material file after the OBJ, as texture_stem does.
-  const std::string atlas_mtl = texture_stem(stem) + ".mtl", gim_mtl = texture_stem(stem) + "_mcgim.mtl";
+  const std::string atlas_mtl = isochart::material_path(stem + obj),
+                    gim_mtl = isochart::material_path(stem + "_mcgim" + obj);
   j["outputs"] = {stem + glb, stem + obj, atlas_mtl, atlas_png, stem + "_mcgim" + glb, stem + "_mcgim" + obj,
                   gim_mtl,    gim_png};
   j["scale"] = r.scale;

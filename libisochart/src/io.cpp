@@ -367,6 +367,18 @@ LoadResult load_mesh(const std::string& path, const LoadOptions& options) {
   return r;
 }
 
+std::string material_path(const std::string& obj_path) {
+  const auto slash = obj_path.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "" : obj_path.substr(0, slash + 1);
+  std::string stem = slash == std::string::npos ? obj_path : obj_path.substr(slash + 1);
+  stem = stem.substr(0, stem.find_last_of('.'));
+  // `mtllib` takes a list of names separated by spaces: a name with spaces in it would be
+  // read as several missing files by other tools, so the MTL's has underscores instead.
+  for (char& c : stem)
+    if (c == ' ' || c == '\t') c = '_';
+  return dir + stem + ".mtl";
+}
+
 void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& options) {
   const MeshFormat fmt = format_from_path(path);
   switch (fmt) {
@@ -375,20 +387,12 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
         write_file_atomic(path, obj_text(mesh, "", options.write_groups));
         return;
       }
-      // The MTL sits beside the OBJ under the same stem; it goes first so that a finished
-      // OBJ never points at a missing MTL, and is removed again if the OBJ fails.
-      const auto slash = path.find_last_of('/');
-      const std::string dir = slash == std::string::npos ? "" : path.substr(0, slash + 1);
-      std::string stem = slash == std::string::npos ? path : path.substr(slash + 1);
-      stem = stem.substr(0, stem.find_last_of('.'));
-      // `mtllib` takes a list of names separated by spaces: a name with spaces in it would be
-      // read as several missing files by other tools, so the MTL's has underscores instead.
-      for (char& c : stem)
-        if (c == ' ' || c == '\t') c = '_';
-      const std::string mtl_path = dir + stem + ".mtl";
+      // The MTL goes first so that a finished OBJ never points at a missing MTL, and is
+      // removed again if the OBJ fails.
+      const std::string mtl_path = material_path(path);
       write_file_atomic(mtl_path, mtl_text(options.texture));
       try {
-        write_file_atomic(path, obj_text(mesh, stem + ".mtl", options.write_groups));
+        write_file_atomic(path, obj_text(mesh, fs::path(mtl_path).filename().string(), options.write_groups));
       } catch (...) {
         if (!OutputBatch::open()) std::remove(mtl_path.c_str());  // else the batch removes it
         throw;

@@ -87,6 +87,11 @@ struct SaveOptions {
   bool write_groups = true;
 };
 
+/// The material file save_mesh writes beside an OBJ with a texture: the OBJ's path with its
+/// extension replaced by .mtl, spaces and tabs in the file name turned into underscores
+/// (`mtllib` names are separated by spaces).
+std::string material_path(const std::string& obj_path);
+
 /// Writes `mesh` to `path` (format from the extension: .obj, .ply, .glb), via a temporary
 /// file in the same directory that is renamed over `path` only when complete.
 /// - OBJ: every number as the shortest decimal that reads back exactly; `vt`, `vn`,
