@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <mutex>
@@ -376,6 +377,23 @@ void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atla
         << " % of the diagonal apart, areas " << aa << " and " << ai << ")";
     throw isochart::InputError(file, msg.str());
   }
+}
+
+isochart::Image read_mesh_texture(const isochart::MeshTexture& t, const std::string& beside) {
+  if (!t.file.empty()) return isochart::read_image(t.file);
+  if (t.bytes.empty()) return {};
+  const std::string tmp = isochart::temporary_path(beside, t.extension);
+  isochart::track_temporary_file(tmp);
+  isochart::Image image;
+  try {
+    std::ofstream(tmp, std::ios::binary).write(t.bytes.data(), static_cast<std::streamsize>(t.bytes.size()));
+    image = isochart::read_image(tmp);
+  } catch (...) {
+    isochart::remove_temporary_file(tmp);
+    throw;
+  }
+  isochart::remove_temporary_file(tmp);
+  return image;
 }
 
 }  // namespace cli

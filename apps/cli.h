@@ -237,6 +237,12 @@ inline isochart::Signal load_signal(const Context& ctx, const std::string& spec,
   return s;
 }
 
+/// The image of a texture a mesh file names or carries (isochart::find_mesh_texture): read from
+/// its file, or decoded from its embedded bytes through a temporary file beside `beside` (the
+/// image library reads files). Empty when `t` names none.
+/// \throw isochart::InputError when the image cannot be read.
+isochart::Image read_mesh_texture(const isochart::MeshTexture& t, const std::string& beside);
+
 /// Seconds since `t0`.
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

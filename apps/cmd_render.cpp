@@ -143,24 +143,8 @@ void run_render(const Context& ctx, const RenderArgs& a) {
       const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
       if (!t.problem.empty()) ctx.warn(a.input, t.problem + "; drawn shaded");
       try {
-        if (!t.file.empty()) {
-          texture = isochart::read_image(t.file);
-          own = t.file;
-        } else if (!t.bytes.empty()) {
-          const std::string tmp = isochart::temporary_path(a.output, t.extension);
-          isochart::track_temporary_file(tmp);
-          try {
-            // The image library reads files; outputs are only renamed into place at the end.
-            std::ofstream(tmp, std::ios::binary)
-                .write(t.bytes.data(), static_cast<std::streamsize>(t.bytes.size()));
-            texture = isochart::read_image(tmp);
-          } catch (...) {
-            isochart::remove_temporary_file(tmp);
-            throw;
-          }
-          isochart::remove_temporary_file(tmp);
-          own = "embedded";
-        }
+        texture = read_mesh_texture(t, a.output);
+        if (!texture.empty()) own = t.file.empty() ? "embedded" : t.file;
       } catch (const isochart::InputError& e) {
         const std::string which = e.file().empty() || e.file() == a.input ? "" : " " + e.file();
         ctx.warn(a.input, "its texture" + which + " cannot be read (" + e.what() + "); drawn shaded");
