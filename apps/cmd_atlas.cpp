@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <initializer_list>
 #include <iomanip>
 #include <sstream>
@@ -33,6 +34,9 @@ struct AtlasArgs {
   std::string signal_texture_out;
   int sae_res = 0;  // 0: the packing size (--width x --height)
   isochart::SignalAtlasOptions signal_options;
+  // The input's own texture carried over onto the atlas.
+  std::string bake_texture;
+  std::string texture;  // the image to carry over when not the one the input names
   GivenOptions given;
 };
 
@@ -42,12 +46,47 @@ constexpr std::initializer_list<const char*> kSignalOptions = {
 
 nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
 
+// The texture --bake-texture carries over (--texture, else the one the input names or
+// embeds), read before any work so that a missing one fails at once. Without --bake-texture, a
+// texture the input carries is not in the outputs, whose texture coordinates are new: said in a
+// warning, with the remedy.
+isochart::Image texture_to_carry(const Context& ctx, const AtlasArgs& a, const isochart::LoadResult& in) {
+  if (a.bake_texture.empty()) {
+    if (!in.mesh.has_uvs() || a.input.rfind("builtin:", 0) == 0) return {};
+    const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
+    if (!t.file.empty() || !t.bytes.empty())
+      ctx.warn(a.input, "its texture " + (t.file.empty() ? std::string("(embedded)") : t.file) +
+                            " is mapped through the texture coordinates the atlas replaces, so the outputs "
+                            "do not carry it; --bake-texture FILE resamples it onto the atlas");
+    return {};
+  }
+  const long long without = in.report.faces_without_uvs;
+  if (!in.mesh.has_uvs())
+    throw isochart::InputError(a.input,
+                               "has no texture coordinates, so no texture to carry over (--bake-texture)");
+  if (without > 0)
+    throw isochart::InputError(a.input, std::to_string(without) +
+                                            (without == 1 ? " face has" : " faces have") +
+                                            " no texture coordinates to carry the texture over through "
+                                            "(--bake-texture)");
+  if (!a.texture.empty()) return isochart::read_image(a.texture);
+  const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
+  if (!t.problem.empty()) throw isochart::InputError(a.input, t.problem + " (--texture IMG names one)");
+  isochart::Image image = read_mesh_texture(t, a.bake_texture);
+  if (image.empty())
+    throw isochart::InputError(
+        a.input, "names no texture to carry over (--bake-texture); give one with --texture IMG");
+  return image;
+}
+
 void run_atlas(const Context& ctx, AtlasArgs a) {
   const auto t0 = std::chrono::steady_clock::now();
   // An option that would be silently ignored is more likely a mistake than a wish.
   if (a.given.has("--png-size") && a.png.empty()) bad_option("--png-size goes with --png");
   if (a.given.has("--alpha") && a.no_graph_cut)
     bad_option("--alpha weighs the graph cut; --no-graph-cut skips it");
+  if (!a.texture.empty() && a.bake_texture.empty())
+    bad_option("--texture names the image --bake-texture carries over; give --bake-texture FILE too");
   if (a.signal.empty())
     for (const char* name : kSignalOptions)
       if (a.given.has(name)) bad_option(std::string(name) + " goes with --signal");
@@ -56,9 +95,15 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
                        ".obj, .glb or .ply");
   {
     std::vector<std::string> outs = a.outputs;
-    for (const std::string* o : {&a.png, &a.imt_out, &a.signal_texture_out}) outs.push_back(*o);
-    ctx.check_paths({a.input, signal_texture(a.signal)}, outs);
-    ctx.check_image_outputs({a.png, a.signal_texture_out});
+    for (const std::string* o : {&a.png, &a.imt_out, &a.signal_texture_out, &a.bake_texture})
+      outs.push_back(*o);
+    // An OBJ that carries the baked texture gets its material file beside it.
+    if (!a.bake_texture.empty())
+      for (const auto& out : a.outputs)
+        if (isochart::format_from_path(out) == isochart::MeshFormat::Obj)
+          outs.push_back(isochart::material_path(out));
+    ctx.check_paths({a.input, signal_texture(a.signal), a.texture}, outs);
+    ctx.check_image_outputs({a.png, a.signal_texture_out, a.bake_texture});
   }
   a.options.seed = ctx.opts.seed;
   a.options.graph_cut = !a.no_graph_cut;
@@ -82,6 +127,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   }
 
   isochart::LoadResult in = ctx.load(a.input);
+  const isochart::Image source_texture = texture_to_carry(ctx, a, in);
   const double load_seconds = seconds_since(t0);
   isochart::Signal signal;
   isochart::SignalAtlasStats sig_stats;
@@ -126,7 +172,30 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     }
   }
   const auto t_out = std::chrono::steady_clock::now();
-  for (const auto& out : a.outputs) isochart::save_mesh(out_mesh, out);
+  std::vector<std::string> materials;
+  if (!source_texture.empty()) {
+    // At the packing size, 2×2 samples a texel up to 2048² (the bake then holds about 440 MB).
+    const int w = a.options.pack.width, h = a.options.pack.height;
+    const int supersample = static_cast<long long>(w) * h <= 2048LL * 2048 ? 2 : 1;
+    isochart::write_image(a.bake_texture,
+                          isochart::transfer_texture(in.mesh, source_texture, out_mesh, w, h, supersample));
+  }
+  for (const auto& out : a.outputs) {
+    isochart::SaveOptions so;
+    if (!source_texture.empty()) {
+      const isochart::MeshFormat f = isochart::format_from_path(out);
+      // An OBJ's material names the image relative to the OBJ; glb embeds it; PLY has no materials.
+      if (f == isochart::MeshFormat::Obj) {
+        const auto dir = std::filesystem::absolute(out).lexically_normal().parent_path();
+        so.texture =
+            std::filesystem::absolute(a.bake_texture).lexically_normal().lexically_relative(dir).string();
+        materials.push_back(isochart::material_path(out));
+      } else if (f == isochart::MeshFormat::Glb) {
+        so.texture = a.bake_texture;
+      }
+    }
+    isochart::save_mesh(out_mesh, out, so);
+  }
   if (!a.png.empty()) {
     // The picture has the texture's proportions, its longer side --png-size pixels.
     const auto [pw, ph] = layout_size(a.png_size, aspect);
@@ -237,10 +306,12 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   j["file"] = a.input;
   // Every file written, the side outputs too (they also keep their own keys).
   std::vector<std::string> written = a.outputs;
-  for (const std::string* side : {&a.png, &a.signal_texture_out, &a.imt_out})
+  for (const std::string* side : {&a.png, &a.signal_texture_out, &a.imt_out, &a.bake_texture})
     if (!side->empty()) written.push_back(*side);
+  written.insert(written.end(), materials.begin(), materials.end());
   j["outputs"] = written;
   if (!a.png.empty()) j["png"] = a.png;
+  if (!a.bake_texture.empty()) j["baked_texture"] = a.bake_texture;
   j["faces"] = in.mesh.num_faces();
   j["charts"] = s.charts;
   j["charts_before_merge"] = s.charts_before_merge;
@@ -391,6 +462,12 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--imt-out", args->imt_out, "Write the per-face IMT (g00 g01 g11 per line)");
   sub->add_option("--signal-texture-out", args->signal_texture_out,
                   "Write the signal baked into the atlas at the SAE's size (normals as 0.5n+0.5)");
+  sub->add_option("--bake-texture", args->bake_texture,
+                  "Carry the input's texture over: resample it through the input's UVs onto the atlas "
+                  "(--width x --height) into this image, which the OBJ's material and the glb reference");
+  sub->add_option("--texture", args->texture,
+                  "With --bake-texture: the image to carry over, instead of the one the input's material "
+                  "names or its glb embeds");
   sub->footer("Example: isocharts atlas builtin:creature -o creature_atlas.obj --png creature_atlas.png");
   sub->callback([&ctx, args, sub, &action] {
     args->given.record(sub, {"--png-size", "--alpha"});

@@ -163,6 +163,57 @@ Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height)
   return img;
 }
 
+Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& target, int width, int height,
+                       int supersample) {
+  const int nf = target.num_faces();
+  if (source.num_faces() != nf)
+    throw InputError("", "cannot transfer a texture between meshes of " + std::to_string(source.num_faces()) +
+                             " and " + std::to_string(nf) + " faces");
+  for (const Mesh* m : {&source, &target})
+    if (!m->has_uvs() || static_cast<int>(m->face_uvs.size()) != nf)
+      throw InputError("", std::string("cannot transfer a texture: the ") +
+                               (m == &source ? "source" : "target") + " mesh has no texture coordinates");
+  if (texture.empty() || texture.channels < 1 || texture.channels > 16)
+    throw InputError("", "cannot transfer a texture of " + std::to_string(texture.channels) + " channels");
+  if (supersample < 1 || supersample > 4)
+    throw InputError("", "texture supersampling must be 1 to 4, got " + std::to_string(supersample));
+  check_size(width, height);
+  check_size(width * supersample, height * supersample);
+  const int channels = texture.channels, alpha = texture.alpha_channel();
+  Signal s;
+  s.dimension = channels;
+  s.texture = texture;
+  s.uvs = source.uvs;
+  s.face_uvs = source.face_uvs;
+  for (const Vec2d& uv : s.uvs) s.tiling = s.tiling || uv.x < 0 || uv.x > 1 || uv.y < 0 || uv.y > 1;
+  // Straight alpha: a transparent texel's stored colour (often black) would bleed into its
+  // neighbours' under bilinear filtering, so colours are filtered premultiplied.
+  auto scale_colours = [&](Image& img, bool divide) {
+    if (alpha < 0) return;
+    for (std::size_t i = 0; i < img.pixels.size(); i += channels) {
+      const float a = img.pixels[i + alpha];
+      for (int c = 0; c < channels; ++c) {
+        if (c == alpha) continue;
+        float& v = img.pixels[i + c];
+        v = divide ? (a > 0 ? v / a : 0.0f) : v * a;
+      }
+    }
+  };
+  scale_colours(s.texture, false);
+  const Image fine = bake_signal(target, s, width * supersample, height * supersample);
+  Image out(width, height, channels);
+  out.channel_names = texture.channel_names;
+  const float weight = 1.0f / static_cast<float>(supersample * supersample);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      for (int dy = 0; dy < supersample; ++dy)
+        for (int dx = 0; dx < supersample; ++dx)
+          for (int c = 0; c < channels; ++c)
+            out.at(x, y, c) += weight * fine.at(x * supersample + dx, y * supersample + dy, c);
+  scale_colours(out, true);
+  return out;
+}
+
 SaeResult signal_approximation_error(const Mesh& mesh, const Signal& signal, int width, int height,
                                      Image* baked) {
   const auto t0 = std::chrono::steady_clock::now();

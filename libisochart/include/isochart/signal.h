@@ -85,6 +85,20 @@ double signal_stretch(const Mesh& mesh, const std::vector<Imt>& imt);
 /// \throw InputError when the mesh has no UVs or the size is not in 1..16384.
 Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height);
 
+/// A texture carried from one layout of a mesh to another: `texture`, mapped through the
+/// texture coordinates of `source`, resampled into a `width`×`height` image for the texture
+/// coordinates of `target` (the same faces, in the same order, laid out anew, e.g. by
+/// build_atlas). Every channel is kept, alpha included; colours are filtered premultiplied
+/// by alpha, so transparent texels lend no colour. Each texel is the mean of
+/// `supersample`² samples in it (point samples at texel centres alias where the new
+/// layout has fewer texels for a part than the old one); texels outside the charts are filled
+/// from the nearest chart, as bake_signal does, so that bilinear lookups and mipmaps do not
+/// bleed. A source coordinate outside [0, 1]² repeats the texture.
+/// \throw InputError when either mesh lacks texture coordinates on some face, the faces
+///        differ in number, the size is not in 1..16384 or supersample is not in 1..4.
+Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& target, int width, int height,
+                       int supersample = 2);
+
 struct SaeResult {
   /// Signal approximation error: sqrt(∫_S |f − f̃|² dA / ∫_S dA), f the signal, f̃ its
   /// bilinear reconstruction from the baked texture, |·| the Euclidean norm over channels.
