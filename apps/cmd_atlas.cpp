@@ -72,6 +72,13 @@ isochart::Image texture_to_carry(const Context& ctx, const AtlasArgs& a, const i
   if (!a.texture.empty()) return isochart::read_image(a.texture);
   const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
   if (!t.problem.empty()) throw isochart::InputError(a.input, t.problem + " (--texture IMG names one)");
+  // One texture is carried over: from a file whose faces use several, most would read another
+  // texture than their own.
+  if (t.several_materials)
+    throw isochart::InputError(
+        a.input,
+        "uses several materials, and --bake-texture carries one texture over; when all "
+        "its faces read one image, name it with --texture IMG");
   isochart::Image image = read_mesh_texture(t, a.bake_texture);
   if (image.empty())
     throw isochart::InputError(

@@ -142,6 +142,8 @@ void run_render(const Context& ctx, const RenderArgs& a) {
       // drawn untextured unless named again with --texture.
       const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
       if (!t.problem.empty()) ctx.warn(a.input, t.problem + "; drawn shaded");
+      if (t.several_materials)
+        ctx.warn(a.input, "uses several materials; every face is drawn with the first one's texture");
       try {
         texture = read_mesh_texture(t, a.output);
         if (!texture.empty()) own = t.file.empty() ? "embedded" : t.file;

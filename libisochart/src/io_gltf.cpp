@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstring>
 #include <map>
+#include <set>
 #include <sstream>
 #include <tuple>
 #include <unordered_map>
@@ -838,6 +839,10 @@ MeshTexture gltf_texture(const std::string& path, std::string_view data, bool bi
   const int tex = model.materials[0].pbrMetallicRoughness.baseColorTexture.index;
   if (tex < 0 || tex >= static_cast<int>(model.textures.size())) return {};
   MeshTexture t;
+  std::set<int> used;
+  for (const tinygltf::Mesh& mesh : model.meshes)
+    for (const tinygltf::Primitive& prim : mesh.primitives) used.insert(prim.material);
+  t.several_materials = used.size() > 1;
   const int source = model.textures[tex].source;
   if (source < 0 || source >= static_cast<int>(model.images.size())) {
     t.problem = "its base-colour texture names no image";

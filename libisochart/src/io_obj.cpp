@@ -380,6 +380,7 @@ std::string directory_of(const std::string& path) {
 MeshTexture obj_texture(const std::string& path, std::string_view data) {
   std::vector<std::string> libraries;
   std::string material;
+  bool several = false;
   for (std::size_t at = 0; at < data.size();) {
     std::size_t end = data.find('\n', at);
     if (end == std::string_view::npos) end = data.size();
@@ -388,9 +389,11 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
     std::string_view rest;
     if (after_keyword(line, "mtllib", rest)) {
       libraries.emplace_back(rest);
-    } else if (material.empty() && after_keyword(line, "usemtl", rest)) {
-      material = std::string(rest);
-      if (!libraries.empty()) break;  // both known: the rest is geometry
+    } else if (after_keyword(line, "usemtl", rest)) {
+      if (material.empty())
+        material = std::string(rest);
+      else
+        several = several || rest != material;
     }
   }
   std::string unreadable;
@@ -422,6 +425,7 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
         const std::string name(space == std::string_view::npos ? rest : rest.substr(space + 1));
         MeshTexture t;
         t.file = name.front() == '/' ? name : directory_of(mtl_path) + name;
+        t.several_materials = several;
         return t;
       }
     }

@@ -829,6 +829,19 @@ TEST_CASE("isocharts atlas --bake-texture carries the input's texture onto the a
   CHECK(run("atlas " + dir + "/in.obj -o " + dir + "/plain.obj --width 256 --height 256") == 0);
   CHECK(read_text(dir + "/err.txt").find("--bake-texture FILE resamples it onto the atlas") !=
         std::string::npos);
+  // Faces of a second material would read the first one's texture: refused, unless --texture
+  // says which image every face reads.
+  {
+    std::string obj = read_text(dir + "/in.obj");
+    const auto face = obj.find("\nf ", obj.find("\nf ") + 1);
+    REQUIRE(face != std::string::npos);
+    obj.insert(face + 1, "usemtl other\n");
+    std::ofstream(dir + "/multi.obj") << obj;
+  }
+  CHECK(run("-q atlas " + dir + "/multi.obj -o " + dir + "/m.obj --bake-texture " + dir + "/m.png") == 2);
+  CHECK(read_text(dir + "/err.txt").find("uses several materials") != std::string::npos);
+  CHECK(run("-q atlas " + dir + "/multi.obj -o " + dir + "/m.obj --bake-texture " + dir +
+            "/m.png --texture " + dir + "/tex.png") == 0);
   // A mesh without texture coordinates has nothing to carry; --texture alone bakes nothing.
   CHECK(run("-q atlas builtin:face -o " + dir + "/f.obj --bake-texture " + dir + "/f.png") == 2);
   CHECK(read_text(dir + "/err.txt").find("has no texture coordinates") != std::string::npos);

@@ -67,6 +67,9 @@ struct MeshTexture {
   std::string bytes;      ///< an embedded image's encoded bytes, or empty
   std::string extension;  ///< ".png" or ".jpg" for `bytes`
   std::string problem;    ///< why a texture the file names cannot be used, or empty
+  /// The faces use more than one material (OBJ `usemtl` names, glTF primitives' materials), so
+  /// this first material's texture is not every face's.
+  bool several_materials = false;
 };
 /// \throw InputError when the mesh file itself cannot be read; a texture named but missing is
 ///        returned by name (reading it then fails).
