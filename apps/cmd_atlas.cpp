@@ -92,6 +92,8 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   if (a.given.has("--png-size") && a.png.empty()) bad_option("--png-size goes with --png");
   if (a.given.has("--alpha") && a.no_graph_cut)
     bad_option("--alpha weighs the graph cut; --no-graph-cut skips it");
+  if (a.given.has("--merge-limit") && a.no_merge)
+    bad_option("--merge-limit bounds the merging --no-merge skips");
   if (!a.texture.empty() && a.bake_texture.empty())
     bad_option("--texture names the image --bake-texture carries over; give --bake-texture FILE too");
   if (a.signal.empty())
@@ -250,7 +252,8 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
                  " (--max-charts only adds charts): its pieces must be cut into disks that meet the "
                  "stretch bounds, and only charts of at most " +
                  plain_number(100 * a.options.merge_max_fraction) +
-                 " % of the faces are merged back (§6); higher --max-l2 or --max-linf may make fewer");
+                 " % of the faces are merged back (§6, --merge-limit); higher --max-l2, --max-linf or "
+                 "--merge-limit may make fewer");
   if (!bounds_met) {
     std::ostringstream w;
     w << "the atlas misses its bounds (" << (per_chart ? "its charts' " : "") << "L2 " << l2_measured
@@ -333,11 +336,12 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   j["chart_linf_max"] = finite_or_null(chart_linf);
   j["splits"] = s.splits;
   j["seed"] = s.seed;
-  j["options"] = {{"max_l2", a.options.max_l2},     {"max_linf", a.options.max_linf},
+  j["options"] = {{"max_l2", a.options.max_l2},         {"max_linf", a.options.max_linf},
                   {"max_charts", a.options.max_charts}, {"landmarks", a.options.landmarks},
-                  {"alpha", a.options.alpha},       {"graph_cut", a.options.graph_cut},
-                  {"merge", a.options.merge},       {"width", a.options.pack.width},
-                  {"height", a.options.pack.height}, {"gutter", a.options.pack.gutter}};
+                  {"alpha", a.options.alpha},           {"graph_cut", a.options.graph_cut},
+                  {"merge", a.options.merge},           {"merge_limit", a.options.merge_max_fraction},
+                  {"width", a.options.pack.width},      {"height", a.options.pack.height},
+                  {"gutter", a.options.pack.gutter}};
   if (!a.signal.empty()) {
     j["signal"] = {{"signal", a.signal},
                    {"use", a.signal_use},
@@ -435,6 +439,12 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
   sub->add_option("--alpha", o.alpha, "Graph-cut weight of dihedral angle vs. embedding distortion")->capture_default_str();
   sub->add_flag("--no-graph-cut", args->no_graph_cut, "Skip graph-cut boundary optimization (ablation)");
   sub->add_flag("--no-merge", args->no_merge, "Skip merging small charts");
+  sub->add_option("--merge-limit", o.merge_max_fraction,
+                  "Charts of up to this fraction of the faces are merged into a neighbour when the union "
+                  "meets the bounds (§6); larger values make fewer charts on simple shapes, for more "
+                  "merging time")
+      ->check(number_in(0.0, 1.0))
+      ->capture_default_str();
   sub->add_option("--signal", args->signal,
                   "Specialize the atlas to a signal (§7): normals, colors, or texture:IMG (through the input's UVs)");
   sub->add_option("--signal-use", args->signal_use,
@@ -477,7 +487,7 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
                   "names or its glb embeds");
   sub->footer("Example: isocharts atlas builtin:creature -o creature_atlas.obj --png creature_atlas.png");
   sub->callback([&ctx, args, sub, &action] {
-    args->given.record(sub, {"--png-size", "--alpha"});
+    args->given.record(sub, {"--png-size", "--alpha", "--merge-limit"});
     args->given.record(sub, kSignalOptions);
     action = [&ctx, args] { run_atlas(ctx, *args); };
   });

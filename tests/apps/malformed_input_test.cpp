@@ -1031,6 +1031,10 @@ TEST_CASE("atlas says when the bounds need more charts than --max-charts, and ch
              Catch::StartsWith("isocharts: error: --max-geometric-l2 goes with --signal-use"));
   CHECK(run_cli("atlas builtin:sphere --no-graph-cut --alpha 0.3" + out, err) == 2);
   CHECK_THAT(read_bytes(err), Catch::Contains("--alpha weighs the graph cut"));
+  CHECK(run_cli("atlas builtin:sphere --no-merge --merge-limit 0.5" + out, err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("--merge-limit bounds the merging --no-merge skips"));
+  CHECK(run_cli("atlas builtin:sphere --merge-limit 1.5" + out, err) == 2);
+  CHECK_THAT(read_bytes(err), Catch::Contains("--merge-limit"));
   // A geometric atlas measured against a signal: one texture, packed geometrically; the report
   // lists every file written.
   const fs::path report = tmp.path / "r.json", png = tmp.path / "p.png", imt = tmp.path / "i.imt";

@@ -140,6 +140,20 @@ TEST_CASE("the atlas does not depend on the mesh's scale", "[atlas]") {
   }
 }
 
+TEST_CASE("a larger merge limit makes fewer charts on simple shapes, within the bounds", "[atlas]") {
+  // §6 merges charts of at most a tenth of the faces: the sphere keeps the 6 its splits made
+  // (measured: 3 with a limit of half the faces; the torus 4 and 2).
+  for (const char* name : {"sphere", "torus"}) {
+    const Mesh mesh = make_builtin(name);
+    AtlasOptions paper, wide;
+    wide.merge_max_fraction = 0.5;
+    const Atlas a = build_atlas(mesh, paper), b = build_atlas(mesh, wide);
+    INFO(name << ": " << a.num_charts() << " charts, " << b.num_charts() << " with the larger limit");
+    check_atlas(mesh, b, wide);
+    CHECK(b.num_charts() < a.num_charts());
+  }
+}
+
 TEST_CASE("atlas of a torus cuts its handle", "[atlas]") {
   const Mesh torus = make_builtin("torus");
   AtlasOptions o;
