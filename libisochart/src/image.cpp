@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <filesystem>
 #include <system_error>
 
@@ -97,6 +98,64 @@ int wrap_index(int i, int n, Wrap wrap) {
 }
 
 }  // namespace
+
+void fill_from_nearest(Image& img, std::vector<char>& filled, int keep) {
+  const int w = img.width, h = img.height;
+  std::deque<int> queue;
+  for (int i = 0; i < w * h; ++i)
+    if (filled[i]) queue.push_back(i);
+  while (!queue.empty()) {
+    const int i = queue.front();
+    queue.pop_front();
+    const int x = i % w, y = i / w;
+    const int nb[4][2] = {{x + 1, y}, {x - 1, y}, {x, y + 1}, {x, y - 1}};
+    for (const auto& p : nb) {
+      if (p[0] < 0 || p[1] < 0 || p[0] >= w || p[1] >= h) continue;
+      const int j = p[1] * w + p[0];
+      if (filled[j]) continue;
+      filled[j] = 1;
+      for (int c = 0; c < img.channels; ++c)
+        if (c != keep)
+          img.pixels[static_cast<std::size_t>(j) * img.channels + c] =
+              img.pixels[static_cast<std::size_t>(i) * img.channels + c];
+      queue.push_back(j);
+    }
+  }
+}
+
+Image resize_area(const Image& in, int width, int height) {
+  if (width < 1 || height < 1 || in.empty()) throw Error("resize_area: empty image or size");
+  Image out(width, height, in.channels);
+  out.channel_names = in.channel_names;
+  // Separable: the box of new texel i spans old texels [i·s, (i + 1)·s) in each direction.
+  auto weights = [](int from, int to) {
+    std::vector<std::vector<std::pair<int, double>>> wts(to);
+    const double s = static_cast<double>(from) / to;
+    for (int i = 0; i < to; ++i) {
+      const double a = i * s, b = (i + 1) * s;
+      for (int k = static_cast<int>(std::floor(a)); k < std::min(from, static_cast<int>(std::ceil(b))); ++k) {
+        const double overlap = std::min(b, k + 1.0) - std::max(a, static_cast<double>(k));
+        if (overlap > 0) wts[i].emplace_back(k, overlap / s);
+      }
+    }
+    return wts;
+  };
+  const auto wx = weights(in.width, width), wy = weights(in.height, height);
+  const int ch = in.channels;
+  std::vector<double> row(static_cast<std::size_t>(width) * ch);
+  for (int y = 0; y < height; ++y) {
+    std::fill(row.begin(), row.end(), 0.0);
+    for (const auto& [sy, fy] : wy[y])
+      for (int x = 0; x < width; ++x)
+        for (const auto& [sx, fx] : wx[x])
+          for (int c = 0; c < ch; ++c)
+            row[static_cast<std::size_t>(x) * ch + c] += fy * fx * in.at(sx, sy, c);
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < ch; ++c)
+        out.at(x, y, c) = static_cast<float>(row[static_cast<std::size_t>(x) * ch + c]);
+  }
+  return out;
+}
 
 void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wrap) {
   const int w = image.width, h = image.height, nc = image.channels;

@@ -524,30 +524,6 @@ Match best_match(const Matcher& m, const KdIndex& kd, const float* query, const 
   return best;
 }
 
-void fill_gutter(Image& img, std::vector<char>& filled) {
-  // Multi-source breadth-first search: every empty texel takes the nearest filled texel's
-  // colour (4-neighbour steps, first reached wins in a fixed order).
-  const int w = img.width, h = img.height;
-  std::deque<int> queue;
-  for (int i = 0; i < w * h; ++i)
-    if (filled[i]) queue.push_back(i);
-  if (queue.empty()) return;
-  while (!queue.empty()) {
-    const int i = queue.front();
-    queue.pop_front();
-    const int x = i % w, y = i / w;
-    const int nb[4][2] = {{x + 1, y}, {x - 1, y}, {x, y + 1}, {x, y - 1}};
-    for (const auto& p : nb) {
-      if (p[0] < 0 || p[1] < 0 || p[0] >= w || p[1] >= h) continue;
-      const int j = p[1] * w + p[0];
-      if (filled[j]) continue;
-      filled[j] = 1;
-      for (int c = 0; c < img.channels; ++c) img.pixels[j * img.channels + c] = img.pixels[i * img.channels + c];
-      queue.push_back(j);
-    }
-  }
-}
-
 struct LevelTaps {
   int fine = 0, coarse = 0;       // taps per group
   std::vector<Tap> taps;          // groups × (fine + coarse)
@@ -1207,7 +1183,7 @@ SynthResult synthesize(const isochart::Mesh& atlas, const std::vector<mcgim::Lev
         for (int c = 0; c < 3; ++c) res.texture.at(x, row, c) = col[g.group[s]][c];
         filled[static_cast<std::size_t>(row) * g.width + x] = 1;
       }
-    fill_gutter(res.texture, filled);
+    isochart::fill_from_nearest(res.texture, filled);
   }
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
@@ -1472,7 +1448,7 @@ Image transfer_to_atlas(const isochart::Mesh& atlas, const mcgim::Level& level, 
     const double wsum = fitted[c] ? shade(c, pc, v) : shade_unfitted(c, pc, v);
     if (wsum > 0) put(x, y, v, wsum);
   }
-  fill_gutter(out, filled);
+  isochart::fill_from_nearest(out, filled);
   return out;
 }
 

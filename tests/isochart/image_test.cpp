@@ -103,6 +103,35 @@ TEST_CASE("images are told by their first bytes: an empty file says so, a PNG na
   CHECK_THROWS_WITH(read_image(dir.file("pipe.exr")), Catch::Contains("is not a regular file"));
 }
 
+TEST_CASE("resize_area averages the texels each new texel covers", "[image]") {
+  Image img(4, 2, 1);
+  for (int x = 0; x < 4; ++x) img.at(x, 0, 0) = img.at(x, 1, 0) = static_cast<float>(x);
+  const Image half = resize_area(img, 2, 1);
+  CHECK(half.at(0, 0, 0) == Approx(0.5));
+  CHECK(half.at(1, 0, 0) == Approx(2.5));
+  // Three texels into two: the middle one is shared half and half.
+  Image three(3, 1, 1);
+  three.at(0, 0, 0) = 0;
+  three.at(1, 0, 0) = 3;
+  three.at(2, 0, 0) = 6;
+  const Image two = resize_area(three, 2, 1);
+  CHECK(two.at(0, 0, 0) == Approx((0 * 1.0 + 3 * 0.5) / 1.5));
+  CHECK(two.at(1, 0, 0) == Approx((3 * 0.5 + 6 * 1.0) / 1.5));
+}
+
+TEST_CASE("fill_from_nearest spreads the nearest filled texel, keeping one channel", "[image]") {
+  Image img(4, 1, 2, 0.0f);
+  img.at(0, 0, 0) = 0.75f;
+  img.at(0, 0, 1) = 1.0f;
+  std::vector<char> filled{1, 0, 0, 0};
+  fill_from_nearest(img, filled, 1);
+  for (int x = 1; x < 4; ++x) {
+    CHECK(img.at(x, 0, 0) == 0.75f);
+    CHECK(img.at(x, 0, 1) == 0.0f);  // kept
+  }
+  CHECK(std::all_of(filled.begin(), filled.end(), [](char f) { return f == 1; }));
+}
+
 TEST_CASE("PNG round trip keeps size, channels and 8-bit values", "[image]") {
   TempDir dir;
   for (int channels : {1, 3, 4}) {

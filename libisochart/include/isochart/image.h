@@ -58,6 +58,16 @@ enum class Wrap { Clamp, Repeat };
 /// half-integers). Writes `image.channels` values to `out`.
 void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wrap = Wrap::Clamp);
 
+/// Gives every texel not `filled` (one flag per texel, updated) the values of the nearest
+/// filled texel (4-neighbour steps, first reached wins in a fixed order), but for channel
+/// `keep` (e.g. an alpha that stays 0), so that texels outside a texture's charts do not
+/// bleed other colours into filtered lookups and mipmaps. Nothing changes when none is filled.
+void fill_from_nearest(Image& image, std::vector<char>& filled, int keep = -1);
+
+/// `image` resized to `width`×`height` by area averaging (each new texel the mean of the old
+/// texels it covers, in proportion): a box-filtered reduction, for shrinking without aliasing.
+Image resize_area(const Image& image, int width, int height);
+
 /// Reads the first subimage of an image file; 8-bit and 16-bit data are scaled to [0, 1].
 /// Fills `channel_names`.
 /// \throw InputError(path, ...) when the file is missing, unreadable, corrupt or in a format
