@@ -200,6 +200,24 @@ Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& tar
     }
   };
   scale_colours(s.texture, false);
+  // A source denser than the samples taken of it (a 4096² texture carried to 1024²) would
+  // alias: it is box-filtered first to the samples' density, the texels the mesh covers in
+  // each layout compared (about uniform in an atlas).
+  double source_texels = 0, sample_texels = 0;
+  for (int f = 0; f < nf; ++f) {
+    auto area = [&](const Mesh& m) {
+      const Face& t = m.face_uvs[f];
+      return std::abs(signed_area(m.uvs[t[0]], m.uvs[t[1]], m.uvs[t[2]]));
+    };
+    source_texels += area(source) * texture.width * texture.height;
+    sample_texels += area(target) * (double(width) * supersample) * (double(height) * supersample);
+  }
+  if (sample_texels > 0 && source_texels > 1.5 * sample_texels) {
+    const double k = std::sqrt(source_texels / sample_texels);
+    const int w = std::max(1, static_cast<int>(std::lround(texture.width / k)));
+    const int h = std::max(1, static_cast<int>(std::lround(texture.height / k)));
+    s.texture = resize_area(s.texture, w, h);
+  }
   const Image fine = bake_signal(target, s, width * supersample, height * supersample);
   Image out(width, height, channels);
   out.channel_names = texture.channel_names;
@@ -211,6 +229,14 @@ Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& tar
           for (int c = 0; c < channels; ++c)
             out.at(x, y, c) += weight * fine.at(x * supersample + dx, y * supersample + dy, c);
   scale_colours(out, true);
+  // Where the texture is wholly transparent its colour is lost in the premultiplied mean; a
+  // reader filtering the straight colours (bilinear, mipmaps) would still mix it into the
+  // visible texels next to it, so it takes theirs.
+  if (alpha >= 0) {
+    std::vector<char> visible(static_cast<std::size_t>(width) * height);
+    for (std::size_t i = 0; i < visible.size(); ++i) visible[i] = out.pixels[i * channels + alpha] > 0;
+    fill_from_nearest(out, visible, alpha);
+  }
   return out;
 }
 
