@@ -836,9 +836,21 @@ MeshTexture gltf_texture(const std::string& path, std::string_view data, bool bi
     ok = false;
   }
   if (!ok || model.materials.empty()) return {};
-  const int tex = model.materials[0].pbrMetallicRoughness.baseColorTexture.index;
+  const tinygltf::TextureInfo& info = model.materials[0].pbrMetallicRoughness.baseColorTexture;
+  const int tex = info.index;
   if (tex < 0 || tex >= static_cast<int>(model.textures.size())) return {};
   MeshTexture t;
+  // Only TEXCOORD_0 is read, untransformed: a texture mapped otherwise would be drawn or carried
+  // over through the wrong coordinates.
+  if (info.texCoord != 0) {
+    t.problem = "its base-colour texture is mapped through TEXCOORD_" + std::to_string(info.texCoord) +
+                ", and only TEXCOORD_0 is read";
+    return t;
+  }
+  if (info.extensions.count("KHR_texture_transform")) {
+    t.problem = "its base-colour texture is moved by KHR_texture_transform, which is not read";
+    return t;
+  }
   std::set<int> used;
   for (const tinygltf::Mesh& mesh : model.meshes)
     for (const tinygltf::Primitive& prim : mesh.primitives) used.insert(prim.material);

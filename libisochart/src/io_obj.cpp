@@ -1,5 +1,7 @@
 // Wavefront OBJ: reader (v with optional colours, vt, vn, f in all four corner forms with
 // relative indices, polygons, g/o groups) and writer (+ MTL).
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <climits>
 #include <cmath>
@@ -375,6 +377,82 @@ std::string directory_of(const std::string& path) {
   return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
 }
 
+// The file a texture map statement names after its options (`-s 1 1 1`, `-clamp on`, ...):
+// the rest of the line, which may hold spaces (Blender writes such names as they are), without
+// surrounding quotes.
+std::string map_file_name(std::string_view rest) {
+  // Options and how many values follow them (-o, -s and -t take one to three numbers).
+  static const std::pair<std::string_view, int> kOptions[] = {
+      {"-blendu", 1}, {"-blendv", 1},  {"-bm", 1},  {"-boost", 1}, {"-cc", 1},
+      {"-clamp", 1},  {"-imfchan", 1}, {"-mm", 2},  {"-o", 3},     {"-s", 3},
+      {"-t", 3},      {"-texres", 1},  {"-type", 1}};
+  auto next_word = [&rest] {
+    rest = trim(rest);
+    const std::size_t end = rest.find_first_of(" \t");
+    const std::string_view w = rest.substr(0, end);
+    rest = end == std::string_view::npos ? std::string_view() : rest.substr(end);
+    return w;
+  };
+  auto is_number = [](std::string_view w) {
+    return !w.empty() && w.find_first_not_of("+-.0123456789eE") == std::string_view::npos &&
+           w.find_first_of("0123456789") != std::string_view::npos;
+  };
+  for (;;) {
+    const std::string_view before = trim(rest);
+    std::string_view probe = before;
+    const std::size_t end = probe.find_first_of(" \t");
+    const std::string_view word = probe.substr(0, end);
+    int values = -1;
+    for (const auto& [name, count] : kOptions)
+      if (word == name) values = count;
+    if (values < 0) {
+      rest = before;
+      break;
+    }
+    rest = end == std::string_view::npos ? std::string_view() : probe.substr(end);
+    const bool numeric = word == "-o" || word == "-s" || word == "-t";
+    for (int i = 0; i < values; ++i) {
+      const std::string_view ahead = trim(rest);
+      const std::string_view value = ahead.substr(0, ahead.find_first_of(" \t"));
+      if (value.empty() || (numeric && i > 0 && !is_number(value))) break;
+      next_word();
+    }
+  }
+  std::string name(trim(rest));
+  if (name.size() >= 2 && name.front() == '"' && name.back() == '"') name = name.substr(1, name.size() - 2);
+  return name;
+}
+
+// A path as written in a material file, relative to `dir` unless absolute; written on Windows
+// (backslashes) it is read with slashes when that is what exists.
+std::string material_file(const std::string& dir, const std::string& name) {
+  std::string p = !name.empty() && name.front() == '/' ? name : dir + name;
+  struct stat st {};
+  if (p.find('\\') != std::string::npos && ::stat(p.c_str(), &st) != 0) {
+    std::string q = name;
+    std::replace(q.begin(), q.end(), '\\', '/');
+    const std::string alt = !q.empty() && q.front() == '/' ? q : dir + q;
+    if (::stat(alt.c_str(), &st) == 0) return alt;
+  }
+  return p;
+}
+
+// The material libraries a `mtllib` statement names: the whole rest of the line when that is
+// a file (a name with spaces), else its words (the statement takes a list).
+std::vector<std::string> material_libraries(const std::string& dir, std::string_view rest) {
+  const std::string whole = material_file(dir, std::string(rest));
+  struct stat st {};
+  if (::stat(whole.c_str(), &st) == 0) return {whole};
+  std::vector<std::string> libs;
+  for (std::string_view r = rest; !trim(r).empty();) {
+    r = trim(r);
+    const std::size_t end = r.find_first_of(" \t");
+    libs.push_back(material_file(dir, std::string(r.substr(0, end))));
+    r = end == std::string_view::npos ? std::string_view() : r.substr(end);
+  }
+  return libs;
+}
+
 }  // namespace
 
 MeshTexture obj_texture(const std::string& path, std::string_view data) {
@@ -388,7 +466,8 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
     at = end + 1;
     std::string_view rest;
     if (after_keyword(line, "mtllib", rest)) {
-      libraries.emplace_back(rest);
+      for (std::string& lib : material_libraries(directory_of(path), rest))
+        libraries.push_back(std::move(lib));
     } else if (after_keyword(line, "usemtl", rest)) {
       if (material.empty())
         material = std::string(rest);
@@ -397,15 +476,14 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
     }
   }
   std::string unreadable;
-  for (const std::string& lib : libraries) {
-    const std::string mtl_path = lib.front() == '/' ? lib : directory_of(path) + lib;
+  for (const std::string& mtl_path : libraries) {
     std::string mtl;
     try {
       mtl = read_file(mtl_path);
     } catch (const InputError& e) {
       // A missing MTL only loses the material, as in every viewer, but is said.
       if (unreadable.empty())
-        unreadable = std::string("its material library cannot be read (") + e.what() + ")";
+        unreadable = "its material library " + mtl_path + " cannot be read (" + e.what() + ")";
       continue;
     }
     bool in_material = false, seen_material = false;
@@ -420,11 +498,10 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
         in_material = material.empty() ? !seen_material : rest == material;
         seen_material = true;
       } else if (in_material && after_keyword(line, "map_Kd", rest)) {
-        // Options (-s 1 1 1, -clamp on, ...) come first; the file name is last.
-        const std::size_t space = rest.find_last_of(" \t");
-        const std::string name(space == std::string_view::npos ? rest : rest.substr(space + 1));
+        const std::string name = map_file_name(rest);
+        if (name.empty()) continue;
         MeshTexture t;
-        t.file = name.front() == '/' ? name : directory_of(mtl_path) + name;
+        t.file = material_file(directory_of(mtl_path), name);
         t.several_materials = several;
         return t;
       }

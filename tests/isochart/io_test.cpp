@@ -783,7 +783,39 @@ TEST_CASE("glTF and OBJ: a texture named but unusable is said, by file or by rea
   // An OBJ whose material library is missing.
   t = find_mesh_texture(d.write("m.obj", "mtllib gone.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
   CHECK(t.file.empty());
-  CHECK_THAT(t.problem, Catch::StartsWith("its material library cannot be read"));
+  CHECK_THAT(t.problem, Catch::StartsWith("its material library " + d.file("gone.mtl") + " cannot be read"));
+  // The texture is what a glTF maps through TEXCOORD_0, untransformed; anything else is said.
+  doc["textures"] = {{{"source", 0}}};
+  doc["images"] = {{{"uri", "tex.png"}}};
+  doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"texCoord", 1}}}}}}};
+  CHECK(find_mesh_texture(d.write("tc1.gltf", doc.dump())).problem ==
+        "its base-colour texture is mapped through TEXCOORD_1, and only TEXCOORD_0 is read");
+  doc["materials"] = nlohmann::json::parse(
+      R"([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+          "extensions": {"KHR_texture_transform": {"scale": [2, 2]}}}}}])");
+  CHECK_THAT(find_mesh_texture(d.write("tt.gltf", doc.dump())).problem,
+             Catch::Contains("KHR_texture_transform"));
+}
+
+TEST_CASE("OBJ: map_Kd names with spaces, options, quotes and backslashes; several mtllib libraries",
+          "[io]") {
+  TempDir d;
+  fs::create_directories(d.file("tex dir"));
+  d.write("tex dir/my tex.png", "");
+  const std::string geometry = "usemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  auto texture_of = [&](const std::string& mtl_line, const std::string& mtllib = "m.mtl") {
+    d.write("m.mtl", "newmtl a\n" + mtl_line + "\n");
+    return find_mesh_texture(d.write("m.obj", "mtllib " + mtllib + "\n" + geometry)).file;
+  };
+  const std::string want = d.file("tex dir/my tex.png");
+  CHECK(texture_of("map_Kd tex dir/my tex.png") == want);  // as Blender writes it
+  CHECK(texture_of("map_Kd -s 1 1 1 -clamp on tex dir/my tex.png") == want);
+  CHECK(texture_of("map_Kd -bm 0.5 -s 2 2 \"tex dir/my tex.png\"") == want);
+  CHECK(texture_of("map_Kd tex dir\\my tex.png") == want);  // written on Windows
+  // `mtllib` takes a list: the first library without the material is passed over.
+  d.write("other.mtl", "newmtl b\nmap_Kd nothing.png\n");
+  d.write("m.mtl", "newmtl a\nmap_Kd tex dir/my tex.png\n");
+  CHECK(find_mesh_texture(d.write("two.obj", "mtllib other.mtl m.mtl\n" + geometry)).file == want);
 }
 
 TEST_CASE("glTF: a chain of nodes deeper than the call stack loads", "[io]") {
