@@ -390,7 +390,7 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
       // The MTL goes first so that a finished OBJ never points at a missing MTL, and is
       // removed again if the OBJ fails.
       const std::string mtl_path = material_path(path);
-      write_file_atomic(mtl_path, mtl_text(options.texture));
+      write_file_atomic(mtl_path, mtl_text(options.texture, options.texture_transparent));
       try {
         write_file_atomic(path, obj_text(mesh, fs::path(mtl_path).filename().string(), options.write_groups));
       } catch (...) {
@@ -403,7 +403,7 @@ void save_mesh(const Mesh& mesh, const std::string& path, const SaveOptions& opt
       write_file_atomic(path, ply_bytes(mesh, options.binary_ply));
       return;
     case MeshFormat::Glb:
-      write_file_atomic(path, glb_bytes(mesh, options.texture));
+      write_file_atomic(path, glb_bytes(mesh, options.texture, options.texture_transparent));
       return;
     case MeshFormat::Off:
     case MeshFormat::Gltf:

@@ -657,7 +657,7 @@ RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, c
   return GltfReader(path, model, options).read();
 }
 
-std::string glb_bytes(const Mesh& m, const std::string& texture) {
+std::string glb_bytes(const Mesh& m, const std::string& texture, bool transparent) {
   tinygltf::Model model;
   model.asset.version = "2.0";
   model.asset.generator = "isocharts";
@@ -770,6 +770,7 @@ std::string glb_bytes(const Mesh& m, const std::string& texture) {
     mat.pbrMetallicRoughness.baseColorTexture.index = 0;
     mat.pbrMetallicRoughness.metallicFactor = 0;
     mat.pbrMetallicRoughness.roughnessFactor = 1;
+    if (transparent) mat.alphaMode = "BLEND";
     model.materials.push_back(mat);
     material = 0;
   }

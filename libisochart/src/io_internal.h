@@ -26,10 +26,10 @@ void weld_equal_positions(RawMesh& raw);
 
 // ---- Writers: return the file contents; save_mesh writes them atomically ----
 std::string obj_text(const Mesh& mesh, const std::string& mtl_file, bool write_groups);
-std::string mtl_text(const std::string& texture);
+std::string mtl_text(const std::string& texture, bool transparent = false);
 std::string ply_bytes(const Mesh& mesh, bool binary);
 /// \throw InputError(texture, ...) when the texture cannot be read or is not PNG/JPEG.
-std::string glb_bytes(const Mesh& mesh, const std::string& texture);
+std::string glb_bytes(const Mesh& mesh, const std::string& texture, bool transparent = false);
 
 /// The largest input file read: a 20-million-face mesh (LoadOptions::max_faces) with normals
 /// and UVs is about 3 GB as OBJ text.

@@ -285,9 +285,9 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
   return raw;
 }
 
-std::string mtl_text(const std::string& texture) {
+std::string mtl_text(const std::string& texture, bool transparent) {
   return "# isocharts\nnewmtl material0\nKa 1 1 1\nKd 1 1 1\nKs 0 0 0\nd 1\nillum 1\nmap_Kd " + texture +
-         "\n";
+         "\n" + (transparent ? "map_d " + texture + "\n" : "");
 }
 
 std::string obj_text(const Mesh& m, const std::string& mtl_file, bool write_groups) {

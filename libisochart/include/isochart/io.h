@@ -84,6 +84,10 @@ struct SaveOptions {
   /// For OBJ: write an MTL next to the OBJ that references this image (path written as
   /// given, relative to the OBJ). For glb: embed this image as the base colour texture.
   std::string texture;
+  /// The texture's alpha is transparency (a cut-out or see-through texture): the glb's material
+  /// blends it (alphaMode BLEND) and the MTL names the image as `map_d` too. Otherwise viewers
+  /// draw the texture opaque.
+  bool texture_transparent = false;
   /// PLY only: binary little-endian (default) or ASCII.
   bool binary_ply = true;
   /// OBJ only: write one `g chartN` group per value of face_groups.
