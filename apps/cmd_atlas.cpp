@@ -1,6 +1,7 @@
 // `isocharts atlas IN -o OUT.obj`: the iso-chart texture atlas of a mesh.
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <initializer_list>
@@ -45,6 +46,46 @@ constexpr std::initializer_list<const char*> kSignalOptions = {
     "--signal-use", "--beta", "--lambda", "--chart-lambda", "--split-efficiency", "--max-geometric-l2", "--sae-res"};
 
 nlohmann::json finite_or_null(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); }
+
+// The baked texture's path as an OBJ's material names it: relative to the OBJ's directory,
+// through symbolic links as they resolve (a name worked out from the spelling alone missed
+// the file when the OBJ's directory was a link).
+std::string material_texture_path(const std::string& obj, const std::string& texture) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path dir = fs::weakly_canonical(fs::absolute(obj).parent_path(), ec);
+  const fs::path tex = fs::weakly_canonical(fs::absolute(texture), ec);
+  return tex.lexically_relative(dir).string();
+}
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+// What --bake-texture cannot do with these outputs, refused before any work.
+void check_bake_outputs(const AtlasArgs& a) {
+  if (a.bake_texture.empty()) return;
+  if (a.outputs.empty())
+    bad_option("--bake-texture " + a.bake_texture +
+               ": no -o output carries the texture coordinates the baked texture is laid out for");
+  const std::string ext = lower_extension(a.bake_texture);
+  for (const auto& out : a.outputs) {
+    const isochart::MeshFormat f = isochart::format_from_path(out);
+    if (f == isochart::MeshFormat::Glb && ext != ".png" && ext != ".jpg" && ext != ".jpeg")
+      bad_option("--bake-texture " + a.bake_texture + ": " + out +
+                 " can embed only a PNG or JPEG image (glTF); give a .png or .jpg texture");
+    // `map_Kd` ends at the line's end, but most readers take its last word for the file.
+    if (f == isochart::MeshFormat::Obj) {
+      const std::string named = material_texture_path(out, a.bake_texture);
+      if (named.find_first_of(" \t") != std::string::npos)
+        bad_option("--bake-texture " + a.bake_texture + ": " + isochart::material_path(out) +
+                   " would name it as '" + named +
+                   "', and material readers split file names at spaces; give a path without spaces");
+    }
+  }
+}
 
 // The texture --bake-texture carries over (--texture, else the one the input names or
 // embeds), read before any work so that a missing one fails at once. Without --bake-texture, a
@@ -102,6 +143,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   for (const auto& out : a.outputs)
     output_mesh_format(out, {isochart::MeshFormat::Obj, isochart::MeshFormat::Glb, isochart::MeshFormat::Ply},
                        ".obj, .glb or .ply");
+  check_bake_outputs(a);
   {
     std::vector<std::string> outs = a.outputs;
     for (const std::string* o : {&a.png, &a.imt_out, &a.signal_texture_out, &a.bake_texture})
@@ -111,7 +153,17 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
       for (const auto& out : a.outputs)
         if (isochart::format_from_path(out) == isochart::MeshFormat::Obj)
           outs.push_back(isochart::material_path(out));
-    ctx.check_paths({a.input, signal_texture(a.signal), a.texture}, outs);
+    // The texture the input's material names is part of the input model, --texture or not:
+    // baking over it would break the model.
+    std::string named;
+    if (!a.bake_texture.empty() && a.input.rfind("builtin:", 0) != 0) {
+      try {
+        named = isochart::find_mesh_texture(a.input).file;
+      } catch (const isochart::InputError&) {
+        // An input that cannot be read is refused below, by name.
+      }
+    }
+    ctx.check_paths({a.input, signal_texture(a.signal), a.texture, named}, outs);
     ctx.check_image_outputs({a.png, a.signal_texture_out, a.bake_texture});
   }
   a.options.seed = ctx.opts.seed;
@@ -180,24 +232,39 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
       isochart::write_image(a.signal_texture_out, baked);
     }
   }
-  const auto t_out = std::chrono::steady_clock::now();
-  std::vector<std::string> materials;
+  double bake_seconds = 0;
+  bool bake_transparent = false;  // the outputs' materials then blend the texture's alpha
   if (!source_texture.empty()) {
+    const auto t_bake = std::chrono::steady_clock::now();
     // At the packing size, 2×2 samples a texel up to 2048² (the bake then holds about 440 MB).
     const int w = a.options.pack.width, h = a.options.pack.height;
     const int supersample = static_cast<long long>(w) * h <= 2048LL * 2048 ? 2 : 1;
-    isochart::write_image(a.bake_texture,
-                          isochart::transfer_texture(in.mesh, source_texture, out_mesh, w, h, supersample));
+    const isochart::Image baked =
+        isochart::transfer_texture(in.mesh, source_texture, out_mesh, w, h, supersample);
+    const std::string ext = lower_extension(a.bake_texture);
+    const int alpha = baked.alpha_channel();
+    long long transparent = 0;
+    if (alpha >= 0)
+      for (std::size_t i = alpha; i < baked.pixels.size(); i += baked.channels)
+        transparent += baked.pixels[i] < 0.999f ? 1 : 0;
+    const bool jpeg = ext == ".jpg" || ext == ".jpeg";
+    if (jpeg && transparent > 0)
+      ctx.warn(a.bake_texture, "JPEG has no alpha: " + std::to_string(transparent) +
+                                   " texels that are not opaque in the texture are written opaque");
+    bake_transparent = transparent > 0 && !jpeg;
+    isochart::write_image(a.bake_texture, baked);
+    bake_seconds = seconds_since(t_bake);
   }
+  const auto t_out = std::chrono::steady_clock::now();
+  std::vector<std::string> materials;
   for (const auto& out : a.outputs) {
     isochart::SaveOptions so;
+    so.texture_transparent = bake_transparent;
     if (!source_texture.empty()) {
       const isochart::MeshFormat f = isochart::format_from_path(out);
       // An OBJ's material names the image relative to the OBJ; glb embeds it; PLY has no materials.
       if (f == isochart::MeshFormat::Obj) {
-        const auto dir = std::filesystem::absolute(out).lexically_normal().parent_path();
-        so.texture =
-            std::filesystem::absolute(a.bake_texture).lexically_normal().lexically_relative(dir).string();
+        so.texture = material_texture_path(out, a.bake_texture);
         materials.push_back(isochart::material_path(out));
       } else if (f == isochart::MeshFormat::Glb) {
         so.texture = a.bake_texture;
@@ -364,6 +431,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   }
   nlohmann::json secs = s.seconds;
   if (!a.signal.empty()) secs["sae"] = sae.seconds;
+  if (!a.bake_texture.empty()) secs["bake"] = bake_seconds;
   secs["load"] = load_seconds;
   secs["output"] = seconds_since(t_out);
   secs["total"] = seconds_since(t0);

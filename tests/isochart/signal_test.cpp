@@ -874,6 +874,37 @@ TEST_CASE("isocharts atlas --bake-texture carries the input's texture onto the a
   CHECK(read_text(dir + "/err.txt").find("uses several materials") != std::string::npos);
   CHECK(run("-q atlas " + dir + "/multi.obj -o " + dir + "/m.obj --bake-texture " + dir +
             "/m.png --texture " + dir + "/tex.png") == 0);
+  // Refused before any work: an OBJ material naming a path with spaces (readers split there), a
+  // glb embedding anything but PNG or JPEG, no mesh output, and baking over the texture the
+  // input's material names (it belongs to the input model, even when --texture names another).
+  std::filesystem::create_directories(dir + "/sp ace");
+  CHECK(run("-q atlas " + dir + "/in.obj -o " + dir + "/s.obj --bake-texture '" + dir + "/sp ace/s.png'") ==
+        2);
+  CHECK(read_text(dir + "/err.txt").find("material readers split file names at spaces") != std::string::npos);
+  CHECK(run("-q atlas " + dir + "/in.obj -o " + dir + "/s.glb --bake-texture " + dir + "/s.exr") == 2);
+  CHECK(read_text(dir + "/err.txt").find("can embed only a PNG or JPEG image") != std::string::npos);
+  CHECK(run("-q atlas " + dir + "/in.obj --bake-texture " + dir + "/s.png") == 2);
+  CHECK(run("-q atlas " + dir + "/in.obj -o " + dir + "/s.obj --bake-texture " + dir + "/tex.png --texture " +
+            dir + "/baked.png") == 2);
+  CHECK(read_text(dir + "/err.txt").find("it is an input of this run") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir + "/s.obj"));
+  // A texture with transparency stays transparent where it is read: the glb blends it, the MTL
+  // names it as the alpha map; a JPEG cannot hold it and says so.
+  {
+    Image rgba(64, 64, 4, 1.0f);
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 32; ++x) rgba.at(x, y, 3) = 0.0f;
+    write_image(dir + "/rgba.png", rgba);
+  }
+  REQUIRE(run("-q atlas " + dir + "/in.obj -o " + dir + "/t.obj -o " + dir +
+              "/t.glb --width 256 --height 256 " + "--bake-texture " + dir + "/t.png --texture " + dir +
+              "/rgba.png") == 0);
+  CHECK(read_text(dir + "/t.mtl").find("map_d t.png") != std::string::npos);
+  CHECK(read_text(dir + "/t.glb").find("\"alphaMode\":\"BLEND\"") != std::string::npos);
+  CHECK(run("atlas " + dir + "/in.obj -o " + dir + "/j.obj --width 256 --height 256 --bake-texture " + dir +
+            "/j.jpg --texture " + dir + "/rgba.png") == 0);
+  CHECK(read_text(dir + "/err.txt").find("JPEG has no alpha") != std::string::npos);
+  CHECK(read_text(dir + "/j.mtl").find("map_d") == std::string::npos);
   // A mesh without texture coordinates has nothing to carry; --texture alone bakes nothing.
   CHECK(run("-q atlas builtin:face -o " + dir + "/f.obj --bake-texture " + dir + "/f.png") == 2);
   CHECK(read_text(dir + "/err.txt").find("has no texture coordinates") != std::string::npos);
