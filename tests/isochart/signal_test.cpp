@@ -661,6 +661,14 @@ Image smooth_texture(int size) {
   return tex;
 }
 
+// A checker of single texels, black and white: its mean over any few texels is grey.
+Image checker_image(int size) {
+  Image checker(size, size, 1);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) checker.at(x, y, 0) = (x + y) % 2 ? 1.0f : 0.0f;
+  return checker;
+}
+
 // The plane laid out anew: a quarter turn, shrunk to 40 % and moved, as another atlas would.
 Mesh turned_layout(const Mesh& m) {
   Mesh t = m;
@@ -710,9 +718,7 @@ TEST_CASE("a texture carried to a little fewer texels is averaged, not point-sam
   // at texel centres, bilinear in the checker, land anywhere between black and white; several
   // samples a texel average to grey.
   Mesh src = plane(4);
-  Image checker(64, 64, 1);
-  for (int y = 0; y < 64; ++y)
-    for (int x = 0; x < 64; ++x) checker.at(x, y, 0) = (x + y) % 2 ? 1.0f : 0.0f;
+  const Image checker = checker_image(64);
   Mesh dst = src;
   for (auto& uv : dst.uvs) uv = {0.05 + 0.85 * uv.x, 0.1 + 0.85 * uv.y};
   auto spread = [&](int supersample) {
@@ -775,9 +781,7 @@ TEST_CASE("a texture far denser than the atlas is filtered before it is carried"
   // A 256² checker of single texels carried to 32²: 64 source texels a new texel. Point or 2×2
   // samples alias into moiré; the mean is grey.
   Mesh src = plane(4);
-  Image checker(256, 256, 1);
-  for (int y = 0; y < 256; ++y)
-    for (int x = 0; x < 256; ++x) checker.at(x, y, 0) = (x + y) % 2 ? 1.0f : 0.0f;
+  const Image checker = checker_image(256);
   Mesh dst = src;
   for (auto& uv : dst.uvs) uv = {0.1 + 0.8 * uv.x, 0.1 + 0.8 * uv.y};  // samples off the texel grid
   const Image out = transfer_texture(src, checker, dst, 37, 37);
