@@ -87,11 +87,12 @@ void check_bake_outputs(const AtlasArgs& a) {
   }
 }
 
-// The texture --bake-texture carries over (--texture, else the one the input names or
-// embeds), read before any work so that a missing one fails at once. Without --bake-texture, a
-// texture the input carries is not in the outputs, whose texture coordinates are new: said in a
-// warning, with the remedy.
-isochart::Image texture_to_carry(const Context& ctx, const AtlasArgs& a, const isochart::LoadResult& in) {
+// The texture --bake-texture carries over (--texture, else `named`, the one the input names
+// or embeds), read before any work so that a missing one fails at once. Without
+// --bake-texture, a texture the input carries is not in the outputs, whose texture
+// coordinates are new: said in a warning, with the remedy.
+isochart::Image texture_to_carry(const Context& ctx, const AtlasArgs& a, const isochart::LoadResult& in,
+                                 const isochart::MeshTexture& named) {
   if (a.bake_texture.empty()) {
     if (!in.mesh.has_uvs() || a.input.rfind("builtin:", 0) == 0) return {};
     const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
@@ -111,7 +112,7 @@ isochart::Image texture_to_carry(const Context& ctx, const AtlasArgs& a, const i
                                             " no texture coordinates to carry the texture over through "
                                             "(--bake-texture)");
   if (!a.texture.empty()) return isochart::read_image(a.texture);
-  const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
+  const isochart::MeshTexture& t = named;
   if (!t.problem.empty()) throw isochart::InputError(a.input, t.problem + " (--texture IMG names one)");
   // One texture is carried over: from a file whose faces use several, most would read another
   // texture than their own.
@@ -144,6 +145,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     output_mesh_format(out, {isochart::MeshFormat::Obj, isochart::MeshFormat::Glb, isochart::MeshFormat::Ply},
                        ".obj, .glb or .ply");
   check_bake_outputs(a);
+  isochart::MeshTexture named_texture;
   {
     std::vector<std::string> outs = a.outputs;
     for (const std::string* o : {&a.png, &a.imt_out, &a.signal_texture_out, &a.bake_texture})
@@ -155,15 +157,14 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
           outs.push_back(isochart::material_path(out));
     // The texture the input's material names is part of the input model, --texture or not:
     // baking over it would break the model.
-    std::string named;
     if (!a.bake_texture.empty() && a.input.rfind("builtin:", 0) != 0) {
       try {
-        named = isochart::find_mesh_texture(a.input).file;
+        named_texture = isochart::find_mesh_texture(a.input);
       } catch (const isochart::InputError&) {
         // An input that cannot be read is refused below, by name.
       }
     }
-    ctx.check_paths({a.input, signal_texture(a.signal), a.texture, named}, outs);
+    ctx.check_paths({a.input, signal_texture(a.signal), a.texture, named_texture.file}, outs);
     ctx.check_image_outputs({a.png, a.signal_texture_out, a.bake_texture});
   }
   a.options.seed = ctx.opts.seed;
@@ -188,7 +189,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   }
 
   isochart::LoadResult in = ctx.load(a.input);
-  const isochart::Image source_texture = texture_to_carry(ctx, a, in);
+  const isochart::Image source_texture = texture_to_carry(ctx, a, in, named_texture);
   const double load_seconds = seconds_since(t0);
   isochart::Signal signal;
   isochart::SignalAtlasStats sig_stats;
