@@ -476,6 +476,7 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
     }
   }
   std::string unreadable;
+  bool defined = false;  // the material used is defined in a library read
   for (const std::string& mtl_path : libraries) {
     std::string mtl;
     try {
@@ -497,6 +498,7 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
         if (seen_material && in_material) break;
         in_material = material.empty() ? !seen_material : rest == material;
         seen_material = true;
+        defined = defined || in_material;
       } else if (in_material && after_keyword(line, "map_Kd", rest)) {
         const std::string name = map_file_name(rest);
         if (name.empty()) continue;
@@ -509,6 +511,9 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
   }
   MeshTexture none;
   none.problem = unreadable;
+  // A material used but defined nowhere is lost as a missing library is, and said alike.
+  if (none.problem.empty() && !material.empty() && !libraries.empty() && !defined)
+    none.problem = "its material " + material + " is defined in no material library it names";
   return none;
 }
 

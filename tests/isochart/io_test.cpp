@@ -816,6 +816,9 @@ TEST_CASE("OBJ: map_Kd names with spaces, options, quotes and backslashes; sever
   d.write("other.mtl", "newmtl b\nmap_Kd nothing.png\n");
   d.write("m.mtl", "newmtl a\nmap_Kd tex dir/my tex.png\n");
   CHECK(find_mesh_texture(d.write("two.obj", "mtllib other.mtl m.mtl\n" + geometry)).file == want);
+  // A material used but defined in no library is said, as a missing library is.
+  CHECK(find_mesh_texture(d.write("undef.obj", "mtllib other.mtl\n" + geometry)).problem ==
+        "its material a is defined in no material library it names");
 }
 
 TEST_CASE("glTF: a chain of nodes deeper than the call stack loads", "[io]") {
