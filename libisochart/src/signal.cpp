@@ -86,8 +86,18 @@ void Signal::evaluate(const Mesh& mesh, int f, double b1, double b2, double* out
   if (is_mapped()) {
     const Face& t = face_uvs[f];
     const Vec2d uv = uvs[t[0]] * b0 + uvs[t[1]] * b1 + uvs[t[2]] * b2;
+    const Wrap wrap = tiling ? Wrap::Repeat : Wrap::Clamp;
     float tmp[16];
-    sample_bilinear(texture, uv.x, uv.y, tmp, tiling ? Wrap::Repeat : Wrap::Clamp);
+    const double lod = face_lod.empty() ? 0.0 : std::clamp<double>(face_lod[f], 0.0, double(mips.size()));
+    const int l0 = static_cast<int>(lod);
+    auto level = [&](int l) -> const Image& { return l == 0 ? texture : mips[l - 1]; };
+    sample_bilinear(level(l0), uv.x, uv.y, tmp, wrap);
+    const double w = lod - l0;
+    if (w > 0) {
+      float hi[16];
+      sample_bilinear(level(l0 + 1), uv.x, uv.y, hi, wrap);
+      for (int c = 0; c < dimension; ++c) tmp[c] = static_cast<float>((1 - w) * tmp[c] + w * hi[c]);
+    }
     for (int c = 0; c < dimension; ++c) out[c] = tmp[c];
     return;
   }

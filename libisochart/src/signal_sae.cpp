@@ -200,23 +200,37 @@ Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& tar
     }
   };
   scale_colours(s.texture, false);
-  // A source denser than the samples taken of it (a 4096² texture carried to 1024²) would
-  // alias: it is box-filtered first to the samples' density, the texels the mesh covers in
-  // each layout compared (about uniform in an atlas).
-  double source_texels = 0, sample_texels = 0;
+  // A face that reads many source texels for each sample taken (a 4096² texture carried to
+  // 1024², or parts a layout squeezed) would alias: it reads a reduced copy of the texture
+  // instead, chosen per face by the longer axis of its map from sample texels to source texels
+  // (as a GPU's mipmapping does; the blur goes along the shorter axis too).
+  const double sw = double(width) * supersample, sh = double(height) * supersample;
+  s.face_lod.assign(nf, 0.0f);
+  double deepest = 0;
   for (int f = 0; f < nf; ++f) {
-    auto area = [&](const Mesh& m) {
-      const Face& t = m.face_uvs[f];
-      return std::abs(signed_area(m.uvs[t[0]], m.uvs[t[1]], m.uvs[t[2]]));
+    const Face &a = source.face_uvs[f], &b = target.face_uvs[f];
+    auto src = [&](int k) {
+      return Vec2d{source.uvs[a[k]].x * texture.width, source.uvs[a[k]].y * texture.height};
     };
-    source_texels += area(source) * texture.width * texture.height;
-    sample_texels += area(target) * (double(width) * supersample) * (double(height) * supersample);
+    auto dst = [&](int k) { return Vec2d{target.uvs[b[k]].x * sw, target.uvs[b[k]].y * sh}; };
+    const Vec2d s1 = src(1) - src(0), s2 = src(2) - src(0), t1 = dst(1) - dst(0), t2 = dst(2) - dst(0);
+    const double det = cross(t1, t2);
+    if (!(std::abs(det) > 0)) continue;
+    // J = [s1 s2] · [t1 t2]⁻¹, its largest singular value from the 2×2 closed form.
+    const double j00 = (s1.x * t2.y - s2.x * t1.y) / det, j01 = (s2.x * t1.x - s1.x * t2.x) / det;
+    const double j10 = (s1.y * t2.y - s2.y * t1.y) / det, j11 = (s2.y * t1.x - s1.y * t2.x) / det;
+    const double e = j00 * j00 + j01 * j01 + j10 * j10 + j11 * j11, d = j00 * j11 - j01 * j10;
+    const double sigma = std::sqrt(0.5 * (e + std::sqrt(std::max(e * e - 4 * d * d, 0.0))));
+    if (sigma > 1 && std::isfinite(sigma)) {
+      s.face_lod[f] = static_cast<float>(std::log2(sigma));
+      deepest = std::max(deepest, static_cast<double>(s.face_lod[f]));
+    }
   }
-  if (sample_texels > 0 && source_texels > 1.5 * sample_texels) {
-    const double k = std::sqrt(source_texels / sample_texels);
-    const int w = std::max(1, static_cast<int>(std::lround(texture.width / k)));
-    const int h = std::max(1, static_cast<int>(std::lround(texture.height / k)));
-    s.texture = resize_area(s.texture, w, h);
+  for (int l = 0; l < static_cast<int>(std::ceil(deepest)); ++l) {
+    const Image& from = l == 0 ? s.texture : s.mips.back();
+    if (from.width == 1 && from.height == 1) break;
+    s.mips.push_back(
+        resize_area(from, std::max(1, (from.width + 1) / 2), std::max(1, (from.height + 1) / 2)));
   }
   const Image fine = bake_signal(target, s, width * supersample, height * supersample);
   Image out(width, height, channels);

@@ -30,6 +30,12 @@ struct Signal {
   /// mapped: texels of the image that were not opaque (alpha < 0.999). Alpha is not part of
   /// the signal (it is dropped from `texture`), so their colour counts as it is stored.
   long long transparent_texels = 0;
+  /// mapped, optional: box-filtered reductions of `texture`, each half the size of the one
+  /// before (mips[0] the first of them), and a level of detail per face (0: `texture`, 1:
+  /// mips[0], ...; fractions blend two levels), so that a face that reads many texels for each
+  /// value taken averages them instead of aliasing (transfer_texture).
+  std::vector<Image> mips;
+  std::vector<float> face_lod;
 
   bool is_mapped() const { return !texture.empty(); }
   /// The signal at barycentric point (1 − b1 − b2, b1, b2) of face f, `dimension` values.
