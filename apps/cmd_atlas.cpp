@@ -404,11 +404,17 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   j["chart_linf_max"] = finite_or_null(chart_linf);
   j["splits"] = s.splits;
   j["seed"] = s.seed;
-  j["options"] = {{"max_l2", a.options.max_l2},         {"max_linf", a.options.max_linf},
-                  {"max_charts", a.options.max_charts}, {"landmarks", a.options.landmarks},
-                  {"alpha", a.options.alpha},           {"graph_cut", a.options.graph_cut},
-                  {"merge", a.options.merge},           {"merge_limit", a.options.merge_max_fraction},
-                  {"width", a.options.pack.width},      {"height", a.options.pack.height},
+  j["options"] = {{"max_l2", a.options.max_l2},
+                  {"max_linf", a.options.max_linf},
+                  {"max_charts", a.options.max_charts},
+                  {"landmarks", a.options.landmarks},
+                  {"alpha", a.options.alpha},
+                  {"graph_cut", a.options.graph_cut},
+                  {"merge", a.options.merge},
+                  {"merge_limit", a.options.merge_max_fraction},
+                  {"pack_grid", a.options.pack.search_size},
+                  {"width", a.options.pack.width},
+                  {"height", a.options.pack.height},
                   {"gutter", a.options.pack.gutter}};
   if (!a.signal.empty()) {
     j["signal"] = {{"signal", a.signal},
@@ -497,6 +503,11 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
          "Texture height in texels (packing; 8 to " + std::to_string(isochart::PackOptions::kMaxSize) + ")")
       ->capture_default_str();
   sub->add_option("--gutter", o.pack.gutter, "Empty texels between charts (0 to 64)")->capture_default_str();
+  sub->add_option("--pack-grid", o.pack.search_size,
+                  "Longest side of the grid the packing is searched on (64 to 8192; 0: the texture's "
+                  "own): a larger texture is packed on one an integer times coarser, the gutter rounded up")
+      ->check(CLI::Range(0, isochart::PackOptions::kMaxSize))
+      ->capture_default_str();
   sub->add_option("--pack-cuts", o.pack_cuts,
                   "Extra charts cut off poorly shaped ones when that packs tighter (-1: automatic, under 12 "
                   "charts; 0: none)")

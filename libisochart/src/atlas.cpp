@@ -881,6 +881,8 @@ void validate_options(const AtlasOptions& o) {
   if (o.pack.width < 8 || o.pack.height < 8 || o.pack.width > kMax || o.pack.height > kMax)
     bad("--width and --height must be between 8 and " + std::to_string(kMax) + " texels");
   if (o.pack.gutter < 0 || o.pack.gutter > 64) bad("--gutter must be between 0 and 64 texels");
+  if (o.pack.search_size != 0 && (o.pack.search_size < 64 || o.pack.search_size > kMax))
+    bad("--pack-grid must be 0 (the texture's own grid) or between 64 and " + std::to_string(kMax));
   if (!(o.max_geometric_l2 >= 1.0) || !std::isfinite(o.max_geometric_l2))
     bad("the geometric L2 bound of a signal atlas must be a number >= 1");
 }

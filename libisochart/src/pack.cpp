@@ -355,6 +355,22 @@ void validate(const PackOptions& o) {
   if (o.variants < 0) bad("pack: variants " + std::to_string(o.variants) + " is negative");
   if (!(o.scale_tolerance > 0 && o.scale_tolerance < 1))
     bad("pack: scale_tolerance " + std::to_string(o.scale_tolerance) + " is outside (0, 1)");
+  if (o.search_size != 0 && (o.search_size < 64 || o.search_size > kMax))
+    bad("pack: search grid " + std::to_string(o.search_size) + " is outside 64.." + std::to_string(kMax) +
+        " (0: the texture's own)");
+}
+
+// How many texels of the texture a texel of the search grid spans (see search_size): 1 when
+// the texture is within it or no coarser grid divides both sides.
+int coarse_factor(const PackOptions& o) {
+  const int longest = std::max(o.width, o.height);
+  if (o.search_size <= 0 || longest <= o.search_size) return 1;
+  for (int k = (longest + o.search_size - 1) / o.search_size; k <= longest; ++k) {
+    if (o.width % k != 0 || o.height % k != 0) continue;
+    const int g = (o.gutter + k - 1) / k;
+    return o.width / k > 2 * g && o.height / k > 2 * g ? k : 1;
+  }
+  return 1;
 }
 
 }  // namespace
@@ -362,6 +378,24 @@ void validate(const PackOptions& o) {
 PackResult pack_charts(std::vector<PackChart>& charts, const PackOptions& options, const Progress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
   validate(options);
+  // A large texture is packed on a coarser grid; the charts' UVs in [0,1]² then fit it as they
+  // are, their gaps k times as many texels.
+  if (const int k = coarse_factor(options); k > 1) {
+    PackOptions coarse = options;
+    coarse.width /= k;
+    coarse.height /= k;
+    coarse.gutter = (options.gutter + k - 1) / k;
+    coarse.search_size = 0;
+    PackResult r = pack_charts(charts, coarse, progress);
+    for (ChartPlacement& p : r.placements) {
+      p.scale *= k;
+      p.offset = p.offset * static_cast<double>(k);
+    }
+    r.texel_size /= k;
+    r.used_width *= k;
+    r.used_height *= k;
+    return r;
+  }
   PackResult result;
   if (charts.empty()) return result;
   report(progress, Stage::Packing, 0);

@@ -1035,6 +1035,9 @@ TEST_CASE("atlas says when the bounds need more charts than --max-charts, and ch
   CHECK_THAT(read_bytes(err), Catch::Contains("--merge-limit bounds the merging --no-merge skips"));
   CHECK(run_cli("atlas builtin:sphere --merge-limit 1.5" + out, err) == 2);
   CHECK_THAT(read_bytes(err), Catch::Contains("--merge-limit"));
+  CHECK(run_cli("atlas builtin:sphere --pack-grid 10" + out, err) == 2);
+  CHECK(read_bytes(err) ==
+        "isocharts: error: --pack-grid must be 0 (the texture's own grid) or between 64 and 8192\n");
   // A geometric atlas measured against a signal: one texture, packed geometrically; the report
   // lists every file written.
   const fs::path report = tmp.path / "r.json", png = tmp.path / "p.png", imt = tmp.path / "i.imt";

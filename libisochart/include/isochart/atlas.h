@@ -45,8 +45,13 @@ struct AtlasOptions {
   int optimize_passes = 6;
   /// Seed of every random choice; with the same seed the atlas is identical for any thread count.
   std::uint64_t seed = 1;
-  /// Packing (§6): texture size, gutter, rotations.
-  PackOptions pack;
+  /// Packing (§6): texture size, gutter, rotations; searched on a grid of at most 1024 on its
+  /// longer side (PackOptions::search_size), so a 4096² atlas packs about as fast as a 1024² one.
+  PackOptions pack = [] {
+    PackOptions p;
+    p.search_size = 1024;
+    return p;
+  }();
   /// Skip the packing (§6) for callers that re-pack the charts themselves (pack_atlas, e.g.
   /// once per texture size): each chart keeps its own parameterization, scaled so its UV area
   /// equals its 3-D area (one texel density, as the packer would scale it) and unrotated; the
