@@ -361,11 +361,12 @@ void validate(const PackOptions& o) {
 }
 
 // How many texels of the texture a texel of the search grid spans (see search_size): 1 when
-// the texture is within it or no coarser grid divides both sides.
+// the texture is within it, or no grid between half the search size and the search size
+// divides both sides (1025² would be packed on 205², far coarser than asked).
 int coarse_factor(const PackOptions& o) {
   const int longest = std::max(o.width, o.height);
   if (o.search_size <= 0 || longest <= o.search_size) return 1;
-  for (int k = (longest + o.search_size - 1) / o.search_size; k <= longest; ++k) {
+  for (int k = (longest + o.search_size - 1) / o.search_size; 2 * (longest / k) >= o.search_size; ++k) {
     if (o.width % k != 0 || o.height % k != 0) continue;
     const int g = (o.gutter + k - 1) / k;
     return o.width / k > 2 * g && o.height / k > 2 * g ? k : 1;

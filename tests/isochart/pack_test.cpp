@@ -271,11 +271,14 @@ TEST_CASE("a texture larger than the search grid is packed on a coarser grid tha
   full.search_size = 0;
   const PackResult f = pack_charts(own, full);
   CHECK(r.packing_ratio > 0.9 * f.packing_ratio);
-  // No coarser grid divides 1023 × 512: the texture's own is used.
-  PackOptions odd = o;
-  odd.width = 1023;
-  std::vector<PackChart> again = input;
+  // No grid of 128 to 256 divides 1023 × 512: the texture's own is used.
+  PackOptions odd = o, odd_own = o;
+  odd.width = odd_own.width = 1023;
+  odd_own.search_size = 0;
+  std::vector<PackChart> again = input, again_own = input;
   check_packing(input, again, odd, pack_charts(again, odd));
+  pack_charts(again_own, odd_own);
+  for (std::size_t i = 0; i < again.size(); ++i) CHECK(again[i].uv == again_own[i].uv);
 }
 
 TEST_CASE("wide gutters, no gutter, one rotation and the paper's plain scheme all hold", "[pack]") {
