@@ -386,11 +386,12 @@ std::string map_file_name(std::string_view rest) {
       {"-blendu", 1}, {"-blendv", 1},  {"-bm", 1},  {"-boost", 1}, {"-cc", 1},
       {"-clamp", 1},  {"-imfchan", 1}, {"-mm", 2},  {"-o", 3},     {"-s", 3},
       {"-t", 3},      {"-texres", 1},  {"-type", 1}};
-  auto next_word = [&rest] {
-    rest = trim(rest);
-    const std::size_t end = rest.find_first_of(" \t");
-    const std::string_view w = rest.substr(0, end);
-    rest = end == std::string_view::npos ? std::string_view() : rest.substr(end);
+  // The first word of `r` (after blanks), and `r` moved past it.
+  auto take_word = [](std::string_view& r) {
+    r = trim(r);
+    const std::size_t end = r.find_first_of(" \t");
+    const std::string_view w = r.substr(0, end);
+    r = end == std::string_view::npos ? std::string_view() : r.substr(end);
     return w;
   };
   auto is_number = [](std::string_view w) {
@@ -398,24 +399,19 @@ std::string map_file_name(std::string_view rest) {
            w.find_first_of("0123456789") != std::string_view::npos;
   };
   for (;;) {
-    const std::string_view before = trim(rest);
-    std::string_view probe = before;
-    const std::size_t end = probe.find_first_of(" \t");
-    const std::string_view word = probe.substr(0, end);
+    std::string_view after = rest;
+    const std::string_view word = take_word(after);
     int values = -1;
     for (const auto& [name, count] : kOptions)
       if (word == name) values = count;
-    if (values < 0) {
-      rest = before;
-      break;
-    }
-    rest = end == std::string_view::npos ? std::string_view() : probe.substr(end);
+    if (values < 0) break;  // the file name starts here
+    rest = after;
     const bool numeric = word == "-o" || word == "-s" || word == "-t";
     for (int i = 0; i < values; ++i) {
-      const std::string_view ahead = trim(rest);
-      const std::string_view value = ahead.substr(0, ahead.find_first_of(" \t"));
+      std::string_view ahead = rest;
+      const std::string_view value = take_word(ahead);
       if (value.empty() || (numeric && i > 0 && !is_number(value))) break;
-      next_word();
+      rest = ahead;
     }
   }
   std::string name(trim(rest));
