@@ -27,6 +27,7 @@ struct AtlasArgs {
   int png_size = 1024;
   bool no_graph_cut = false;
   bool no_merge = false;
+  bool keep_face_order = false;
   isochart::AtlasOptions options;
   // Signal-specialized atlas (§7).
   std::string signal;
@@ -261,6 +262,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   for (const auto& out : a.outputs) {
     isochart::SaveOptions so;
     so.texture_transparent = bake_transparent;
+    if (a.keep_face_order) so.write_groups = isochart::ObjGroups::FaceOrder;
     if (!source_texture.empty()) {
       const isochart::MeshFormat f = isochart::format_from_path(out);
       // An OBJ's material names the image relative to the OBJ; glb embeds it; PLY has no materials.
@@ -556,7 +558,11 @@ void add_atlas(CLI::App& app, Context& ctx, Action& action) {
                   "Texture size at which the SAE is reported (about this many texels squared, in the "
                   "--width:--height shape; default: the packing size, at most 4096 squared)")
       ->check(CLI::Range(1, 8192));
-  sub->add_option("--imt-out", args->imt_out, "Write the per-face IMT (g00 g01 g11 per line)");
+  sub->add_option("--imt-out", args->imt_out,
+                  "Write the per-face IMT (g00 g01 g11 per line, in the input's face order)");
+  sub->add_flag("--keep-face-order", args->keep_face_order,
+                "Write the OBJ's faces in the input's order (a `g chartN` wherever the chart changes) "
+                "instead of each chart's faces together");
   sub->add_option("--signal-texture-out", args->signal_texture_out,
                   "Write the signal baked into the atlas at the SAE's size (normals as 0.5n+0.5)");
   sub->add_option("--bake-texture", args->bake_texture,

@@ -25,7 +25,7 @@ MeshTexture gltf_texture(const std::string& path, std::string_view data, bool bi
 void weld_equal_positions(RawMesh& raw);
 
 // ---- Writers: return the file contents; save_mesh writes them atomically ----
-std::string obj_text(const Mesh& mesh, const std::string& mtl_file, bool write_groups);
+std::string obj_text(const Mesh& mesh, const std::string& mtl_file, ObjGroups write_groups);
 std::string mtl_text(const std::string& texture, bool transparent = false);
 std::string ply_bytes(const Mesh& mesh, bool binary);
 /// \throw InputError(texture, ...) when the texture cannot be read or is not PNG/JPEG.

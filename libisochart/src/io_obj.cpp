@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <numeric>
 #include <unordered_map>
 
 #include "io_internal.h"
@@ -290,7 +291,7 @@ std::string mtl_text(const std::string& texture, bool transparent) {
          "\n" + (transparent ? "map_d " + texture + "\n" : "");
 }
 
-std::string obj_text(const Mesh& m, const std::string& mtl_file, bool write_groups) {
+std::string obj_text(const Mesh& m, const std::string& mtl_file, ObjGroups write_groups) {
   std::string out;
   out.reserve(m.positions.size() * 48 + m.uvs.size() * 32 + m.faces.size() * 40);
   out += "# isocharts\n";
@@ -326,10 +327,18 @@ std::string obj_text(const Mesh& m, const std::string& mtl_file, bool write_grou
       out += '\n';
     }
   if (!mtl_file.empty()) out += "usemtl material0\n";
-  const bool groups = write_groups && m.face_groups.size() == m.faces.size();
+  const bool groups = write_groups != ObjGroups::None && m.face_groups.size() == m.faces.size();
+  // Importers make one object or selection set per `g` statement, so a chart whose faces are
+  // scattered through the file would come in as thousands of pieces: each group's faces are
+  // written together (stable, groups in ascending order) unless the face order must stay.
+  std::vector<int> order(m.faces.size());
+  std::iota(order.begin(), order.end(), 0);
+  if (groups && write_groups == ObjGroups::Contiguous)
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return m.face_groups[a] < m.face_groups[b]; });
   bool first = true;
   int last_group = 0;
-  for (int f = 0; f < m.num_faces(); ++f) {
+  for (const int f : order) {
     if (groups && (first || m.face_groups[f] != last_group)) {
       last_group = m.face_groups[f];
       out += "g chart";

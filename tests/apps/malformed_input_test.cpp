@@ -12,6 +12,7 @@
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "isochart/image.h"
@@ -975,6 +976,46 @@ TEST_CASE("sae --source takes the atlas's faces in any order, as a glb writes th
     return std::stod(text.substr(text.find("\"sae\":") + 6));
   };
   CHECK(sae(glb) == Approx(sae(obj)).epsilon(1e-6));  // the glb holds float positions
+}
+
+TEST_CASE("atlas writes one group per chart, or keeps the input's face order when asked", "[cli]") {
+  TempDir tmp("face_order");
+  const fs::path src = tmp.path / "src.obj", grouped = tmp.path / "g.obj", kept = tmp.path / "k.obj",
+                 report = tmp.path / "r.json", err = tmp.path / "err.txt";
+  // The source's faces come by chart; its atlas at a tighter bound has other charts, which
+  // run through that order.
+  REQUIRE(run_cli("-q atlas builtin:torus -o '" + src.string() + "'", err) == 0);
+  const std::string run = "-q atlas '" + src.string() + "' --max-l2 1.02 --report '" + report.string() + "' ";
+  REQUIRE(run_cli(run + "-o '" + grouped.string() + "'", err) == 0);
+  const int charts = nlohmann::json::parse(read_bytes(report))["charts"];
+  REQUIRE(run_cli(run + "--keep-face-order -o '" + kept.string() + "'", err) == 0);
+  // Per file: the `g` lines, and each face's vertex indices (the part before each '/').
+  const auto read = [](const fs::path& p) {
+    std::vector<std::string> g, faces;
+    std::istringstream in(read_bytes(p));
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("g ", 0) == 0) g.push_back(line);
+      if (line.rfind("f ", 0) != 0) continue;
+      std::istringstream words(line.substr(2));
+      std::string face;
+      for (std::string w; words >> w;) face += w.substr(0, w.find('/')) + ' ';
+      faces.push_back(face);
+    }
+    return std::make_pair(g, faces);
+  };
+  const auto [src_g, src_faces] = read(src);
+  const auto [g_g, g_faces] = read(grouped);
+  const auto [k_g, k_faces] = read(kept);
+  CHECK(static_cast<int>(g_g.size()) == charts);
+  CHECK(std::set<std::string>(g_g.begin(), g_g.end()).size() == g_g.size());
+  CHECK(k_faces == src_faces);
+  CHECK(k_g.size() > g_g.size());  // the charts interleave in the source's order
+  CHECK(g_faces != src_faces);
+  auto sorted = [](std::vector<std::string> v) {
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  CHECK(sorted(g_faces) == sorted(src_faces));
 }
 
 TEST_CASE("bad image outputs and device outputs are refused before any work", "[cli]") {

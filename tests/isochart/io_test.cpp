@@ -920,6 +920,56 @@ TEST_CASE("OBJ round trip keeps everything exactly", "[io]") {
   CHECK(d.entries() == std::vector<std::string>{"cube.obj"});
 }
 
+TEST_CASE("OBJ writes each group's faces together unless the face order must stay", "[io]") {
+  TempDir d;
+  // Groups interleaved face by face, the way an atlas's charts run through the input's order.
+  Mesh m = attributed_cube();
+  for (int f = 0; f < m.num_faces(); ++f) m.face_groups[f] = (f % 3 == 1) ? 0 : (f % 3 == 0 ? 2 : 1);
+  const auto g_lines = [](const std::string& text) {
+    std::vector<std::string> g;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("g ", 0) == 0) g.push_back(line);
+    return g;
+  };
+
+  save_mesh(m, d.file("grouped.obj"));
+  CHECK(g_lines(io_test::read_bytes(d.file("grouped.obj"))) ==
+        std::vector<std::string>{"g chart0", "g chart1", "g chart2"});
+  const Mesh grouped = load_mesh(d.file("grouped.obj")).mesh;
+  REQUIRE(grouped.num_faces() == m.num_faces());
+  // The same faces, group by group in the mesh's order within each group.
+  std::vector<int> expect_order;
+  for (int g = 0; g < 3; ++g)
+    for (int f = 0; f < m.num_faces(); ++f)
+      if (m.face_groups[f] == g) expect_order.push_back(f);
+  for (int i = 0; i < grouped.num_faces(); ++i) {
+    const int f = expect_order[i];
+    CHECK(grouped.face_groups[i] == m.face_groups[f]);
+    for (int k = 0; k < 3; ++k) {
+      CHECK(grouped.positions[grouped.faces[i][k]] == m.positions[m.faces[f][k]]);
+      CHECK(grouped.uvs[grouped.face_uvs[i][k]] == m.uvs[m.face_uvs[f][k]]);
+    }
+  }
+
+  SaveOptions keep;
+  keep.write_groups = ObjGroups::FaceOrder;
+  save_mesh(m, d.file("ordered.obj"), keep);
+  CHECK(g_lines(io_test::read_bytes(d.file("ordered.obj"))).size() ==
+        static_cast<std::size_t>(m.num_faces()));
+  const Mesh ordered = load_mesh(d.file("ordered.obj")).mesh;
+  check_same_corners(m, ordered, 1e-12, false);
+  // Group ids are numbered by first appearance when read, so compare the partition.
+  for (int f = 0; f < m.num_faces(); ++f)
+    for (int h = 0; h < m.num_faces(); ++h)
+      CHECK((ordered.face_groups[f] == ordered.face_groups[h]) == (m.face_groups[f] == m.face_groups[h]));
+
+  SaveOptions none;
+  none.write_groups = ObjGroups::None;
+  save_mesh(m, d.file("plain.obj"), none);
+  CHECK(g_lines(io_test::read_bytes(d.file("plain.obj"))).empty());
+}
+
 TEST_CASE("PLY round trips, binary and ASCII", "[io]") {
   TempDir d;
   const Mesh m = attributed_cube();

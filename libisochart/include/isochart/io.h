@@ -80,6 +80,13 @@ MeshTexture find_mesh_texture(const std::string& path);
 /// \throw InputError as load_mesh for file-level problems.
 RawMesh read_raw_mesh(const std::string& path, const LoadOptions& options = {});
 
+/// How an OBJ writes a mesh's face groups.
+enum class ObjGroups {
+  None,        ///< no `g` statements
+  Contiguous,  ///< each group's faces together, groups in ascending order, one `g` each
+  FaceOrder,   ///< faces in the mesh's order, a `g` wherever the group changes
+};
+
 struct SaveOptions {
   /// For OBJ: write an MTL next to the OBJ that references this image (path written as
   /// given, relative to the OBJ). For glb: embed this image as the base colour texture.
@@ -90,8 +97,8 @@ struct SaveOptions {
   bool texture_transparent = false;
   /// PLY only: binary little-endian (default) or ASCII.
   bool binary_ply = true;
-  /// OBJ only: write one `g chartN` group per value of face_groups.
-  bool write_groups = true;
+  /// OBJ only: how face_groups become `g chartN` statements.
+  ObjGroups write_groups = ObjGroups::Contiguous;
 };
 
 /// The material file save_mesh writes beside an OBJ with a texture: the OBJ's path with its
@@ -102,8 +109,9 @@ std::string material_path(const std::string& obj_path);
 /// Writes `mesh` to `path` (format from the extension: .obj, .ply, .glb), via a temporary
 /// file in the same directory that is renamed over `path` only when complete.
 /// - OBJ: every number as the shortest decimal that reads back exactly; `vt`, `vn`,
-///   `g chartN` per face group; with a texture, `NAME.mtl` beside it (written first, removed
-///   again if the OBJ fails).
+///   `g chartN` per face group (by default each group's faces written together, so the
+///   file's face order can differ from the mesh's); with a texture, `NAME.mtl` beside it (written first,
+///   removed again if the OBJ fails).
 /// - PLY: float positions and normals, uchar colours, per-corner UVs as a face `texcoord`
 ///   list (MeshLab's convention); no groups.
 /// - glb: float POSITION/NORMAL/COLOR_0/TEXCOORD_0 with vertices split at UV seams, one
