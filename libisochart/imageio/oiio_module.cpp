@@ -93,8 +93,8 @@ int trailer_complete(const char* path, bool by_content) {
   return tail.find(marker) != std::string::npos ? 1 : 0;
 }
 
-int read_file(const char* path, long long max_values, int* width, int* height, int* channels, float** pixels,
-              char* names, std::size_t names_size, char* message, std::size_t message_size) {
+int read_file(const char* path, long long max_values, int* width, int* height, int* channels, int* bits,
+              float** pixels, char* names, std::size_t names_size, char* message, std::size_t message_size) {
   *pixels = nullptr;
   {
     std::FILE* f = std::fopen(path, "rb");
@@ -171,6 +171,11 @@ int read_file(const char* path, long long max_values, int* width, int* height, i
   *width = spec.width;
   *height = spec.height;
   *channels = spec.nchannels;
+  // What the file can say: a 16-bit texture carried through an atlas should stay 16-bit.
+  const OIIO::TypeDesc::BASETYPE base = static_cast<OIIO::TypeDesc::BASETYPE>(spec.format.basetype);
+  const bool floating =
+      base == OIIO::TypeDesc::HALF || base == OIIO::TypeDesc::FLOAT || base == OIIO::TypeDesc::DOUBLE;
+  *bits = floating ? 32 : spec.format.size() >= 2 ? 16 : 8;
   *pixels = data;
   return kIsochartsImageOk;
 }
@@ -187,7 +192,7 @@ int write_bytes(const char* path, const std::vector<unsigned char>& bytes) {
 }
 
 int write_file(const char* path, int width, int height, int channels, int stride, const float* pixels,
-               int as_float, int alpha, const char* names, const char* const* attributes, char* message,
+               int bits, int alpha, const char* names, const char* const* attributes, char* message,
                std::size_t message_size) {
   auto out = OIIO::ImageOutput::create(path);
   if (!out) {
@@ -201,7 +206,10 @@ int write_file(const char* path, int width, int height, int channels, int stride
   std::vector<unsigned char> encoded;
   OIIO::Filesystem::IOVecOutput memory(encoded);
   const bool in_memory = complete_check >= 0 && out->supports("ioproxy") && out->set_ioproxy(&memory);
-  OIIO::ImageSpec spec(width, height, channels, as_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+  const OIIO::TypeDesc type = bits == 32   ? OIIO::TypeDesc::FLOAT
+                              : bits == 16 ? OIIO::TypeDesc::UINT16
+                                           : OIIO::TypeDesc::UINT8;
+  OIIO::ImageSpec spec(width, height, channels, type);
   spec.alpha_channel = alpha;
   // Our pixels have straight alpha; without this the writer would divide colours by alpha.
   if (alpha >= 0) spec.attribute("oiio:UnassociatedAlpha", 1);
@@ -281,11 +289,11 @@ class QuietStderr {
 };
 
 // Nothing may escape across the C boundary.
-int safe_read(const char* path, long long max_values, int* width, int* height, int* channels, float** pixels,
-              char* names, std::size_t names_size, char* message, std::size_t message_size) {
+int safe_read(const char* path, long long max_values, int* width, int* height, int* channels, int* bits,
+              float** pixels, char* names, std::size_t names_size, char* message, std::size_t message_size) {
   try {
     const QuietStderr quiet;
-    return read_file(path, max_values, width, height, channels, pixels, names, names_size, message,
+    return read_file(path, max_values, width, height, channels, bits, pixels, names, names_size, message,
                      message_size);
   } catch (const std::bad_alloc&) {
     return report(kIsochartsImageError, "out of memory reading the image", message, message_size);
@@ -296,11 +304,11 @@ int safe_read(const char* path, long long max_values, int* width, int* height, i
 }
 
 int safe_write(const char* path, int width, int height, int channels, int stride, const float* pixels,
-               int as_float, int alpha, const char* names, const char* const* attributes, char* message,
+               int bits, int alpha, const char* names, const char* const* attributes, char* message,
                std::size_t message_size) {
   try {
-    return write_file(path, width, height, channels, stride, pixels, as_float, alpha, names, attributes,
-                      message, message_size);
+    return write_file(path, width, height, channels, stride, pixels, bits, alpha, names, attributes, message,
+                      message_size);
   } catch (const std::exception& e) {
     std::remove(path);
     return report(kIsochartsImageError, one_line(e.what()), message, message_size);

@@ -196,7 +196,7 @@ Image read_image(const std::string& path) {
   char names[4096] = {0};
   char message[1024] = {0};
   const int status = m.read(path.c_str(), kMaxImageValues, &image.width, &image.height, &image.channels,
-                            &data, names, sizeof names, message, sizeof message);
+                            &image.bits, &data, names, sizeof names, message, sizeof message);
   if (status == kIsochartsImageInputError) throw InputError(path, message);
   if (status != kIsochartsImageOk) throw Error("cannot read image " + path + ": " + message);
   const std::size_t n = static_cast<std::size_t>(image.width) * image.height * image.channels;
@@ -248,6 +248,10 @@ void write_image(const std::string& path, const Image& image) {
   const fs::path tmp = temporary_path(target.string(), fs::path(path).extension().string());
 
   const bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".pfm";
+  // 16 bits where the format holds them (PNG, TIFF, PNM); JPEG and the like keep 8.
+  const bool deep = image.bits >= 16 && (ext == ".png" || ext == ".tif" || ext == ".tiff" || ext == ".ppm" ||
+                                         ext == ".pgm" || ext == ".pnm");
+  const int bits = is_float ? 32 : deep ? 16 : 8;
   int channels = image.channels;
   const bool named = static_cast<int>(image.channel_names.size()) == image.channels;
   // JPEG has no alpha; keep colour (or grey) only.
@@ -278,9 +282,8 @@ void write_image(const std::string& path, const Image& image) {
 
   char message[1024] = {0};
   track_temporary_file(tmp.string());
-  const int status =
-      m.write(tmp.c_str(), image.width, image.height, channels, stride, pixels, is_float ? 1 : 0, alpha,
-              named ? names.c_str() : nullptr, attributes.data(), message, sizeof message);
+  const int status = m.write(tmp.c_str(), image.width, image.height, channels, stride, pixels, bits, alpha,
+                             named ? names.c_str() : nullptr, attributes.data(), message, sizeof message);
   if (status != kIsochartsImageOk) remove_temporary_file(tmp.string());
   if (status == kIsochartsImageUnsupported)
     throw InputError(path, "unsupported image format '" + ext + "' (use .png, .jpg, .exr, .tif, ...)");

@@ -14,7 +14,7 @@
 extern "C" {
 
 /// Bumped whenever the struct below changes; the loader refuses a module with another.
-#define ISOCHARTS_IMAGE_MODULE_ABI 2
+#define ISOCHARTS_IMAGE_MODULE_ABI 3
 
 /// Results of the module's calls. Messages are one line, without the file name.
 enum IsochartsImageStatus {
@@ -31,17 +31,19 @@ struct IsochartsImageModule {
   /// Reads the first subimage as float, alpha straight. On success `*pixels` holds
   /// width·height·channels values (row-major, top row first), to be released with
   /// free_pixels, and `names` the channel names, each followed by '\n' (truncated to
-  /// names_size, always NUL-terminated). Refuses images of more than max_values values.
-  int (*read)(const char* path, long long max_values, int* width, int* height, int* channels, float** pixels,
-              char* names, std::size_t names_size, char* message, std::size_t message_size);
+  /// names_size, always NUL-terminated), `*bits` the file's bits per channel (8, 16, or 32 for
+  /// floating point). Refuses images of more than max_values values.
+  int (*read)(const char* path, long long max_values, int* width, int* height, int* channels, int* bits,
+              float** pixels, char* names, std::size_t names_size, char* message, std::size_t message_size);
   void (*free_pixels)(float* pixels);
   /// Writes `pixels` (width·height, `stride` floats apart, the first `channels` of each) to
-  /// `path` in the format of its extension: float when `as_float`, else 8-bit. `alpha` is the
+  /// `path` in the format of its extension, `bits` per channel: 32 (float), 16 or 8; a format
+  /// that cannot hold 16 bits gets 8 (JPEG), one that holds floats only gets floats. `alpha` is the
   /// alpha channel's index or −1. `names` ('\n'-separated, one per channel) and
   /// `attributes` (key, value, key, value, ..., NULL) may be NULL. Nothing is left at
   /// `path` when the write fails.
   int (*write)(const char* path, int width, int height, int channels, int stride, const float* pixels,
-               int as_float, int alpha, const char* names, const char* const* attributes, char* message,
+               int bits, int alpha, const char* names, const char* const* attributes, char* message,
                std::size_t message_size);
   /// 1 when there is a writer for the extension of `path` (nothing is created), else 0.
   int (*can_write)(const char* path);

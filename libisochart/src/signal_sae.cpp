@@ -235,6 +235,7 @@ Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& tar
   const Image fine = bake_signal(target, s, width * supersample, height * supersample);
   Image out(width, height, channels);
   out.channel_names = texture.channel_names;
+  out.bits = texture.bits;  // a 16-bit or float texture is not rounded to 8 bits on the way
   const float weight = 1.0f / static_cast<float>(supersample * supersample);
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x)

@@ -151,6 +151,32 @@ TEST_CASE("PNG round trip keeps size, channels and 8-bit values", "[image]") {
   }
 }
 
+TEST_CASE("a 16-bit image stays 16-bit where the format holds it", "[image]") {
+  TempDir dir;
+  Image a(4, 2, 3);
+  for (std::size_t i = 0; i < a.pixels.size(); ++i) a.pixels[i] = static_cast<float>(1000 + 37 * i) / 65535;
+  CHECK(a.bits == 8);
+  write_image(dir.file("eight.png"), a);
+  const Image eight = read_image(dir.file("eight.png"));
+  CHECK(eight.bits == 8);
+  CHECK(std::abs(eight.pixels[0] - a.pixels[0]) > 1e-4);  // 1000/65535 is 4.3e-4 from 4/255
+  a.bits = 16;
+  for (const std::string ext : {".png", ".tif"}) {
+    INFO(ext);
+    write_image(dir.file("deep" + ext), a);
+    const Image b = read_image(dir.file("deep" + ext));
+    CHECK(b.bits == 16);
+    double worst = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i)
+      worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
+    CHECK(worst < 1e-6);
+  }
+  write_image(dir.file("deep.jpg"), a);
+  CHECK(read_image(dir.file("deep.jpg")).bits == 8);
+  write_image(dir.file("deep.exr"), a);
+  CHECK(read_image(dir.file("deep.exr")).bits == 32);
+}
+
 TEST_CASE("8-bit output clamps and rounds", "[image]") {
   TempDir dir;
   Image a(3, 1, 1);

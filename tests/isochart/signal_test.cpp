@@ -686,6 +686,10 @@ TEST_CASE("a texture carried to another layout reads the same on the surface", "
   const Image out = transfer_texture(src, tex, dst, 128, 128);
   REQUIRE(out.width == 128);
   REQUIRE(out.channels == 3);
+  Image deep = tex;
+  deep.bits = 16;  // a 16-bit source is baked into a 16-bit image, not rounded to 8 bits
+  CHECK(out.bits == 8);
+  CHECK(transfer_texture(src, deep, dst, 16, 16).bits == 16);
   // Surface points read through the new layout give what they gave through the old one.
   double sum = 0, worst = 0;
   int n = 0;

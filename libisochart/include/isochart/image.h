@@ -23,6 +23,9 @@ struct Image {
   /// Optional channel names (as stored in the file; EXR keeps them sorted). Written when there
   /// is one per channel, and then no channel is taken for alpha unless it is named "A".
   std::vector<std::string> channel_names;
+  /// Bits per channel of the file it was read from (8, 16, or 32 for floating point); write_image
+  /// writes 16-bit PNG, TIFF and PNM files when this is 16 or more, 8-bit ones otherwise.
+  int bits = 8;
   /// Optional string metadata written with the image (key, value), e.g. {"compression", "zip"}.
   std::vector<std::pair<std::string, std::string>> attributes;
 
@@ -75,7 +78,8 @@ Image resize_area(const Image& image, int width, int height);
 Image read_image(const std::string& path);
 
 /// Writes `image` to `path` in the format given by the extension: float for .exr/.hdr/.pfm,
-/// 8-bit otherwise (values clamped to [0, 1]; JPEG drops an alpha channel). The image is
+/// 16-bit PNG/TIFF/PNM for an image of 16 or more `bits`, 8-bit otherwise (values clamped to
+/// [0, 1]; JPEG drops an alpha channel). The image is
 /// written to a temporary file in the same directory (same extension) and renamed over
 /// `path` only when complete, so `path` never holds a partial image.
 /// \throw InputError(path, ...) for an unknown extension or a missing directory,
