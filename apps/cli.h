@@ -243,6 +243,10 @@ inline isochart::Signal load_signal(const Context& ctx, const std::string& spec,
 /// \throw isochart::InputError when the image cannot be read.
 isochart::Image read_mesh_texture(const isochart::MeshTexture& t, const std::string& beside);
 
+/// `mesh` with its texture coordinates moved to where material `t` reads its image (OBJ
+/// `map_Kd -s/-o`: uv · scale + offset); `mesh` itself when the material moves none.
+isochart::Mesh as_material_reads(const isochart::MeshTexture& t, const isochart::Mesh& mesh);
+
 /// Seconds since `t0`.
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -241,8 +241,11 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     // At the packing size, 2×2 samples a texel up to 2048² (the bake then holds about 440 MB).
     const int w = a.options.pack.width, h = a.options.pack.height;
     const int supersample = static_cast<long long>(w) * h <= 2048LL * 2048 ? 2 : 1;
+    // Read as the input's material reads its texture (its wrap and map transform), whichever
+    // image --texture names.
     const isochart::Image baked =
-        isochart::transfer_texture(in.mesh, source_texture, out_mesh, w, h, supersample);
+        isochart::transfer_texture(as_material_reads(named_texture, in.mesh), source_texture, out_mesh, w, h,
+                                   supersample, named_texture.wrap);
     const std::string ext = lower_extension(a.bake_texture);
     const int alpha = baked.alpha_channel();
     long long transparent = 0;

@@ -146,7 +146,11 @@ void run_render(const Context& ctx, const RenderArgs& a) {
         ctx.warn(a.input, "uses several materials; every face is drawn with the first one's texture");
       try {
         texture = read_mesh_texture(t, a.output);
-        if (!texture.empty()) own = t.file.empty() ? "embedded" : t.file;
+        if (!texture.empty()) {
+          own = t.file.empty() ? "embedded" : t.file;
+          mesh = as_material_reads(t, mesh);
+          o.texture_wrap = t.wrap;
+        }
       } catch (const isochart::InputError& e) {
         const std::string which = e.file().empty() || e.file() == a.input ? "" : " " + e.file();
         ctx.warn(a.input, "its texture" + which + " cannot be read (" + e.what() + "); drawn shaded");

@@ -90,9 +90,19 @@ const IsochartsImageModule& image_module() {
 }
 
 int wrap_index(int i, int n, Wrap wrap) {
-  if (wrap == Wrap::Repeat) {
-    i %= n;
-    return i < 0 ? i + n : i;
+  switch (wrap) {
+    case Wrap::Repeat:
+      i %= n;
+      return i < 0 ? i + n : i;
+    case Wrap::Mirror: {
+      // Period 2n: the texture, then its mirror image (texel n is texel n − 1 again).
+      const long long period = 2LL * n;
+      long long k = i % period;
+      if (k < 0) k += period;
+      return static_cast<int>(k < n ? k : period - 1 - k);
+    }
+    case Wrap::Clamp:
+      break;
   }
   return std::clamp(i, 0, n - 1);
 }
@@ -157,7 +167,7 @@ Image resize_area(const Image& in, int width, int height) {
   return out;
 }
 
-void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wrap) {
+void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wrap_u, Wrap wrap_v) {
   const int w = image.width, h = image.height, nc = image.channels;
   if (image.empty()) {
     std::fill(out, out + nc, 0.0f);
@@ -173,8 +183,8 @@ void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wr
   const double limit = 1e9;
   const int x0 = static_cast<int>(std::clamp(fx, -limit, limit));
   const int y0 = static_cast<int>(std::clamp(fy, -limit, limit));
-  const int xs[2] = {wrap_index(x0, w, wrap), wrap_index(x0 + 1, w, wrap)};
-  const int ys[2] = {wrap_index(y0, h, wrap), wrap_index(y0 + 1, h, wrap)};
+  const int xs[2] = {wrap_index(x0, w, wrap_u), wrap_index(x0 + 1, w, wrap_u)};
+  const int ys[2] = {wrap_index(y0, h, wrap_v), wrap_index(y0 + 1, h, wrap_v)};
   for (int c = 0; c < nc; ++c) {
     const float top = image.at(xs[0], ys[0], c) * (1 - ax) + image.at(xs[1], ys[0], c) * ax;
     const float bottom = image.at(xs[0], ys[1], c) * (1 - ax) + image.at(xs[1], ys[1], c) * ax;

@@ -856,6 +856,17 @@ MeshTexture gltf_texture(const std::string& path, std::string_view data, bool bi
   for (const tinygltf::Mesh& mesh : model.meshes)
     for (const tinygltf::Primitive& prim : mesh.primitives) used.insert(prim.material);
   t.several_materials = used.size() > 1;
+  // glTF's sampler wraps: REPEAT (also the default without a sampler), CLAMP_TO_EDGE,
+  // MIRRORED_REPEAT.
+  const int sampler = model.textures[tex].sampler;
+  if (sampler >= 0 && sampler < static_cast<int>(model.samplers.size())) {
+    auto wrap = [](int mode) {
+      if (mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE) return Wrap::Clamp;
+      if (mode == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT) return Wrap::Mirror;
+      return Wrap::Repeat;
+    };
+    t.wrap = {wrap(model.samplers[sampler].wrapS), wrap(model.samplers[sampler].wrapT)};
+  }
   const int source = model.textures[tex].source;
   if (source < 0 || source >= static_cast<int>(model.images.size())) {
     t.problem = "its base-colour texture names no image";

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <climits>
 #include <cmath>
+#include <cstdlib>
 #include <numeric>
 #include <unordered_map>
 
@@ -386,10 +387,17 @@ std::string directory_of(const std::string& path) {
   return slash == std::string::npos ? std::string() : path.substr(0, slash + 1);
 }
 
-// The file a texture map statement names after its options (`-s 1 1 1`, `-clamp on`, ...):
+// A texture map statement: the file it names after its options (`-s 1 1 1`, `-clamp on`, ...),
 // the rest of the line, which may hold spaces (Blender writes such names as they are), without
-// surrounding quotes.
-std::string map_file_name(std::string_view rest) {
+// surrounding quotes; and the options that change where the image is read.
+struct MapStatement {
+  std::string file;
+  bool clamp = false;  // -clamp on
+  Vec2d scale{1, 1};   // -s u v
+  Vec2d offset{0, 0};  // -o u v
+};
+
+MapStatement map_statement(std::string_view rest) {
   // Options and how many values follow them (-o, -s and -t take one to three numbers).
   static const std::pair<std::string_view, int> kOptions[] = {
       {"-blendu", 1}, {"-blendv", 1},  {"-bm", 1},  {"-boost", 1}, {"-cc", 1},
@@ -407,6 +415,7 @@ std::string map_file_name(std::string_view rest) {
     return !w.empty() && w.find_first_not_of("+-.0123456789eE") == std::string_view::npos &&
            w.find_first_of("0123456789") != std::string_view::npos;
   };
+  MapStatement m;
   for (;;) {
     std::string_view after = rest;
     const std::string_view word = take_word(after);
@@ -421,11 +430,19 @@ std::string map_file_name(std::string_view rest) {
       const std::string_view value = take_word(ahead);
       if (value.empty() || (numeric && i > 0 && !is_number(value))) break;
       rest = ahead;
+      if (word == "-clamp") m.clamp = value == "on";
+      if ((word == "-s" || word == "-o") && i < 2 && is_number(value)) {
+        // strtod of a word the number test passed; a malformed one ("1e") reads as its prefix.
+        const double x = std::strtod(std::string(value).c_str(), nullptr);
+        Vec2d& target = word == "-s" ? m.scale : m.offset;
+        if (std::isfinite(x)) (i == 0 ? target.x : target.y) = x;
+      }
     }
   }
-  std::string name(trim(rest));
-  if (name.size() >= 2 && name.front() == '"' && name.back() == '"') name = name.substr(1, name.size() - 2);
-  return name;
+  m.file = std::string(trim(rest));
+  if (m.file.size() >= 2 && m.file.front() == '"' && m.file.back() == '"')
+    m.file = m.file.substr(1, m.file.size() - 2);
+  return m;
 }
 
 // A path as written in a material file, relative to `dir` unless absolute; written on Windows
@@ -505,11 +522,14 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
         seen_material = true;
         defined = defined || in_material;
       } else if (in_material && after_keyword(line, "map_Kd", rest)) {
-        const std::string name = map_file_name(rest);
-        if (name.empty()) continue;
+        const MapStatement map = map_statement(rest);
+        if (map.file.empty()) continue;
         MeshTexture t;
-        t.file = material_file(directory_of(mtl_path), name);
+        t.file = material_file(directory_of(mtl_path), map.file);
         t.several_materials = several;
+        if (map.clamp) t.wrap = {Wrap::Clamp, Wrap::Clamp};
+        t.uv_scale = map.scale;
+        t.uv_offset = map.offset;
         return t;
       }
     }

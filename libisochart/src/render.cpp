@@ -172,7 +172,7 @@ struct Shared {
   std::vector<Vec3d> face_normal;
   std::vector<Vec3d> corner_normal;
   std::vector<Vec3d> face_color;  // Shaded / Charts
-  Wrap texture_wrap = Wrap::Repeat;
+  TextureWrap texture_wrap;
   int texture_alpha = -1;  // the texture's alpha channel, if it has one
   // With alpha, the texture with its colours multiplied by alpha: filtered straight, the colour
   // of transparent texels bled in as a fringe along alpha edges.
@@ -290,7 +290,7 @@ void render_view(const Shared& s, int view, int x0, int tile_w, Image& out) {
     if (tex) {
       const auto& uv = mesh.face_uvs[f];
       const Vec2d q = mesh.uvs[uv[0]] * m[0] + mesh.uvs[uv[1]] * m[1] + mesh.uvs[uv[2]] * m[2];
-      sample_bilinear(*tex, q.x, q.y, texel, s.texture_wrap);
+      sample_bilinear(*tex, q.x, q.y, texel, s.texture_wrap.u, s.texture_wrap.v);
       base = tex->channels >= 3 ? Vec3d{texel[0], texel[1], texel[2]} : Vec3d{texel[0], texel[0], texel[0]};
       // A texture with alpha (RGBA, or grey and alpha) lies over the plain grey surface, as in
       // a viewer's blend, instead of showing the colour of its transparent texels.
@@ -500,10 +500,14 @@ Image render_mesh(const Mesh& input, const RenderOptions& options) {
       if (o.texture->channels > 64) throw InputError("", "texture has too many channels");
       {
         // An atlas (all UVs in the unit square) must not bleed across the texture's borders;
-        // anything else is taken as a tiling texture.
-        bool unit = true;
-        for (const Vec2d& uv : mesh.uvs) unit = unit && uv.x >= 0 && uv.x <= 1 && uv.y >= 0 && uv.y <= 1;
-        s.texture_wrap = unit ? Wrap::Clamp : Wrap::Repeat;
+        // an axis the coordinates leave is read as the material says (by default it repeats).
+        bool out_u = false, out_v = false;
+        for (const Vec2d& uv : mesh.uvs) {
+          out_u = out_u || uv.x < 0 || uv.x > 1;
+          out_v = out_v || uv.y < 0 || uv.y > 1;
+        }
+        s.texture_wrap.u = out_u ? o.texture_wrap.u : Wrap::Clamp;
+        s.texture_wrap.v = out_v ? o.texture_wrap.v : Wrap::Clamp;
       }
       s.texture_alpha = o.texture->alpha_channel();
       if (s.texture_alpha >= 0) {

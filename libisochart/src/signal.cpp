@@ -81,21 +81,34 @@ void check_signal(const Mesh& m, const Signal& s) {
 
 }  // namespace
 
+void Signal::set_texture_coordinates(const std::vector<Vec2d>& coordinates, const std::vector<Face>& corners,
+                                     const TextureWrap& material) {
+  uvs = coordinates;
+  face_uvs = corners;
+  bool out_u = false, out_v = false;
+  for (const Vec2d& uv : uvs) {
+    out_u = out_u || uv.x < 0 || uv.x > 1;
+    out_v = out_v || uv.y < 0 || uv.y > 1;
+  }
+  tiling = out_u || out_v;
+  wrap.u = out_u ? material.u : Wrap::Clamp;
+  wrap.v = out_v ? material.v : Wrap::Clamp;
+}
+
 void Signal::evaluate(const Mesh& mesh, int f, double b1, double b2, double* out) const {
   const double b0 = 1 - b1 - b2;
   if (is_mapped()) {
     const Face& t = face_uvs[f];
     const Vec2d uv = uvs[t[0]] * b0 + uvs[t[1]] * b1 + uvs[t[2]] * b2;
-    const Wrap wrap = tiling ? Wrap::Repeat : Wrap::Clamp;
     float tmp[16];
     const double lod = face_lod.empty() ? 0.0 : std::clamp<double>(face_lod[f], 0.0, double(mips.size()));
     const int l0 = static_cast<int>(lod);
     auto level = [&](int l) -> const Image& { return l == 0 ? texture : mips[l - 1]; };
-    sample_bilinear(level(l0), uv.x, uv.y, tmp, wrap);
+    sample_bilinear(level(l0), uv.x, uv.y, tmp, wrap.u, wrap.v);
     const double w = lod - l0;
     if (w > 0) {
       float hi[16];
-      sample_bilinear(level(l0 + 1), uv.x, uv.y, hi, wrap);
+      sample_bilinear(level(l0 + 1), uv.x, uv.y, hi, wrap.u, wrap.v);
       for (int c = 0; c < dimension; ++c) tmp[c] = static_cast<float>((1 - w) * tmp[c] + w * hi[c]);
     }
     for (int c = 0; c < dimension; ++c) out[c] = tmp[c];
@@ -147,9 +160,7 @@ Signal make_signal(const Mesh& mesh, const std::string& spec, const std::string&
     }
     s.dimension = s.texture.channels;
     if (s.dimension > 16) throw InputError(path, "image has more than 16 channels");
-    s.uvs = mesh.uvs;
-    s.face_uvs = mesh.face_uvs;
-    for (const Vec2d& uv : s.uvs) s.tiling = s.tiling || uv.x < 0 || uv.x > 1 || uv.y < 0 || uv.y > 1;
+    s.set_texture_coordinates(mesh.uvs, mesh.face_uvs);
   } else {
     throw InputError(file, "unknown --signal '" + spec + "' (expected normals, colors or texture:IMG)");
   }

@@ -164,7 +164,7 @@ Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height)
 }
 
 Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& target, int width, int height,
-                       int supersample) {
+                       int supersample, const TextureWrap& wrap) {
   const int nf = target.num_faces();
   if (source.num_faces() != nf)
     throw InputError("", "cannot transfer a texture between meshes of " + std::to_string(source.num_faces()) +
@@ -183,9 +183,7 @@ Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& tar
   Signal s;
   s.dimension = channels;
   s.texture = texture;
-  s.uvs = source.uvs;
-  s.face_uvs = source.face_uvs;
-  for (const Vec2d& uv : s.uvs) s.tiling = s.tiling || uv.x < 0 || uv.x > 1 || uv.y < 0 || uv.y > 1;
+  s.set_texture_coordinates(source.uvs, source.face_uvs, wrap);
   // Straight alpha: a transparent texel's stored colour (often black) would bleed into its
   // neighbours' under bilinear filtering, so colours are filtered premultiplied.
   auto scale_colours = [&](Image& img, bool divide) {

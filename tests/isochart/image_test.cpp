@@ -377,4 +377,21 @@ TEST_CASE("bilinear lookup", "[image]") {
   CHECK(v == Approx(2.0));
   sample_bilinear(img, 1.25, 0.25, &v, Wrap::Repeat);  // same as u = 0.25
   CHECK(v == Approx(2.0));
+  // Mirrored: the tile right of [0, 1] is the texture flipped, so u = 1.25 reads u = 0.75,
+  // and the next tile is the texture again (u = 2.25 reads u = 0.25).
+  sample_bilinear(img, 1.25, 0.25, &v, Wrap::Mirror);
+  CHECK(v == Approx(3.0));
+  sample_bilinear(img, 2.25, 0.25, &v, Wrap::Mirror);
+  CHECK(v == Approx(2.0));
+  sample_bilinear(img, -0.25, 0.25, &v, Wrap::Mirror);  // flipped left of 0 too: u = 0.25
+  CHECK(v == Approx(2.0));
+  sample_bilinear(img, 1.0, 0.25, &v, Wrap::Mirror);  // the seam blends a texel with itself
+  CHECK(v == Approx(3.0));
+  // Each axis its own way: u repeats, v is clamped (and the other way round).
+  sample_bilinear(img, 1.25, 7.0, &v, Wrap::Repeat, Wrap::Clamp);  // u = 0.25, top row
+  CHECK(v == Approx(0.0));
+  sample_bilinear(img, 7.0, 1.25, &v, Wrap::Clamp, Wrap::Repeat);  // right column, v = 0.25
+  CHECK(v == Approx(3.0));
+  sample_bilinear(img, 0.25, 1.25, &v, Wrap::Clamp, Wrap::Mirror);  // v = 0.75: top row
+  CHECK(v == Approx(0.0));
 }

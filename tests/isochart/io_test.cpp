@@ -780,6 +780,16 @@ TEST_CASE("glTF and OBJ: a texture named but unusable is said, by file or by rea
   doc["samplers"] = {nlohmann::json::object()};
   CHECK(find_mesh_texture(d.write("none.gltf", doc.dump())).problem ==
         "its base-colour texture names no image");
+  // The sampler's wraps are kept per axis; without a sampler glTF repeats.
+  doc["images"] = {{{"uri", "tex.png"}}};
+  doc["textures"] = {{{"source", 0}}};
+  t = find_mesh_texture(d.write("nosampler.gltf", doc.dump()));
+  CHECK((t.wrap.u == Wrap::Repeat && t.wrap.v == Wrap::Repeat));
+  doc["textures"] = {{{"source", 0}, {"sampler", 0}}};
+  doc["samplers"] = {{{"wrapS", 33071}, {"wrapT", 33648}}};
+  t = find_mesh_texture(d.write("sampler.gltf", doc.dump()));
+  CHECK(t.problem.empty());
+  CHECK((t.wrap.u == Wrap::Clamp && t.wrap.v == Wrap::Mirror));
   // An OBJ whose material library is missing.
   t = find_mesh_texture(d.write("m.obj", "mtllib gone.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
   CHECK(t.file.empty());
@@ -812,6 +822,17 @@ TEST_CASE("OBJ: map_Kd names with spaces, options, quotes and backslashes; sever
   CHECK(texture_of("map_Kd -s 1 1 1 -clamp on tex dir/my tex.png") == want);
   CHECK(texture_of("map_Kd -bm 0.5 -s 2 2 \"tex dir/my tex.png\"") == want);
   CHECK(texture_of("map_Kd tex dir\\my tex.png") == want);  // written on Windows
+  // The options that move the image or stop its tiling are kept, the file name still found.
+  d.write("m.mtl", "newmtl a\nmap_Kd -clamp on -s 2 3 1 -o 0.5 -0.25 0 -bm 1 tex dir/my tex.png\n");
+  MeshTexture t = find_mesh_texture(d.write("m.obj", "mtllib m.mtl\n" + geometry));
+  CHECK(t.file == want);
+  CHECK((t.wrap.u == Wrap::Clamp && t.wrap.v == Wrap::Clamp));
+  CHECK((t.uv_scale.x == 2 && t.uv_scale.y == 3));
+  CHECK((t.uv_offset.x == 0.5 && t.uv_offset.y == -0.25));
+  d.write("m.mtl", "newmtl a\nmap_Kd -clamp off tex dir/my tex.png\n");
+  t = find_mesh_texture(d.file("m.obj"));
+  CHECK((t.wrap.u == Wrap::Repeat && t.wrap.v == Wrap::Repeat));
+  CHECK((t.uv_scale.x == 1 && t.uv_offset.y == 0));
   // `mtllib` takes a list: the first library without the material is passed over.
   d.write("other.mtl", "newmtl b\nmap_Kd nothing.png\n");
   d.write("m.mtl", "newmtl a\nmap_Kd tex dir/my tex.png\n");

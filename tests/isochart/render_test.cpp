@@ -219,6 +219,32 @@ TEST_CASE("textured render shows both colours of a checkerboard", "[render]") {
   CHECK(count_pixels(render_mesh(quad, o), 0.2f) == 0);
 }
 
+TEST_CASE("a texture is wrapped per axis as the material asks", "[render]") {
+  Mesh quad = textured_quad();
+  quad.uvs = {{0, 0}, {2, 0}, {2, 1}, {0, 1}};  // two tiles along u, one along v
+  Image tex(8, 8, 3, 1.0f);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 4; ++x)
+      for (int c = 0; c < 3; ++c) tex.at(x, y, c) = 0.0f;  // dark left half
+  RenderOptions o;
+  o.width = o.height = 128;
+  o.color = ColorMode::Textured;
+  o.texture = &tex;
+  const Image repeated = render_mesh(quad, o);  // glTF's default
+  o.texture_wrap = {Wrap::Clamp, Wrap::Clamp};
+  const Image clamped = render_mesh(quad, o);
+  o.texture_wrap = {Wrap::Mirror, Wrap::Clamp};
+  const Image mirrored = render_mesh(quad, o);
+  // Repeated and mirrored, half the quad is dark; clamped, the second tile is the right edge's
+  // bright texels, so a quarter is.
+  const int dark_repeated = count_pixels(repeated, 0.2f), dark_clamped = count_pixels(clamped, 0.2f);
+  CHECK(dark_repeated > 1000);
+  CHECK(dark_clamped < 0.6 * dark_repeated);
+  CHECK(count_pixels(mirrored, 0.2f) == Approx(dark_repeated).epsilon(0.1));  // one blurred edge fewer
+  // Mirrored, the second tile's dark half is on its right, not its left.
+  CHECK(mirrored.pixels != repeated.pixels);
+}
+
 TEST_CASE("a transparent texture shows the plain surface beneath it", "[render]") {
   // Black texels with alpha 0 used to render black: the alpha channel was ignored.
   const Mesh quad = textured_quad();

@@ -589,6 +589,33 @@ TEST_CASE("a texture signal repeats where the texture coordinates leave the unit
   std::filesystem::remove(png);
 }
 
+TEST_CASE("a texture signal wraps per axis as the material says, and clamps an axis kept inside",
+          "[signal]") {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.faces = {{0, 1, 2}};
+  Signal s;
+  s.texture = Image(4, 4, 1, 0.0f);
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) s.texture.at(x, y, 0) = x < 2 ? 1.0f : 0.0f;  // bright left half
+  s.dimension = 1;
+  // Only u leaves [0, 1]: the material's mirror applies along u, v stays clamped even though
+  // the material repeats it (v's coordinates never ask for a second tile).
+  s.set_texture_coordinates({{1, 0}, {2, 0}, {1, 1}}, m.faces, TextureWrap{Wrap::Mirror, Wrap::Repeat});
+  CHECK(s.tiling);
+  CHECK((s.wrap.u == Wrap::Mirror && s.wrap.v == Wrap::Clamp));
+  double v = -1;
+  s.evaluate(m, 0, 0.125, 0.1, &v);  // u = 1.125 mirrors to 0.875: the dark right half
+  CHECK(v == Approx(0.0));
+  s.set_texture_coordinates({{1, 0}, {2, 0}, {1, 1}}, m.faces);  // repeated by default
+  CHECK(s.wrap.u == Wrap::Repeat);
+  s.evaluate(m, 0, 0.125, 0.1, &v);  // u = 1.125 repeats to 0.125: the bright left half
+  CHECK(v == Approx(1.0));
+  s.set_texture_coordinates({{0, 0}, {1, 0}, {0, 1}}, m.faces, TextureWrap{Wrap::Mirror, Wrap::Mirror});
+  CHECK_FALSE(s.tiling);
+  CHECK((s.wrap.u == Wrap::Clamp && s.wrap.v == Wrap::Clamp));
+}
+
 TEST_CASE("a texture signal drops alpha wherever it is and counts transparent texels", "[signal]") {
   const std::string base =
       (std::filesystem::temp_directory_path() / ("isocharts_alpha_" + std::to_string(::getpid()))).string();
@@ -715,6 +742,31 @@ TEST_CASE("a texture carried to another layout reads the same on the surface", "
   float darkest = 1;
   for (float v : out.pixels) darkest = std::min(darkest, v);
   CHECK(darkest > 0.05f);
+}
+
+TEST_CASE("a texture carried from coordinates outside the unit square wraps as the material says",
+          "[signal]") {
+  Mesh src = plane(8);
+  for (auto& uv : src.uvs) uv.x += 1;  // the plane laid over the second tile along u
+  const Mesh dst = plane(8);
+  Image tex(16, 16, 3, 0.0f);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x) tex.at(x, y, 0) = x < 8 ? 1.0f : 0.0f;  // red on the left half
+  auto red_at = [](const Image& img, double u) {
+    float c[3];
+    sample_bilinear(img, u, 0.5, c);
+    return c[0];
+  };
+  const Image repeated = transfer_texture(src, tex, dst, 32, 32);  // glTF's default
+  CHECK(red_at(repeated, 0.2) == Approx(1.0).margin(0.02));
+  CHECK(red_at(repeated, 0.8) == Approx(0.0).margin(0.02));
+  const Image mirrored = transfer_texture(src, tex, dst, 32, 32, 2, TextureWrap{Wrap::Mirror, Wrap::Repeat});
+  CHECK(red_at(mirrored, 0.2) == Approx(0.0).margin(0.02));
+  CHECK(red_at(mirrored, 0.8) == Approx(1.0).margin(0.02));
+  // Clamped, the whole second tile reads the right edge's texels: no red anywhere.
+  const Image clamped = transfer_texture(src, tex, dst, 32, 32, 2, TextureWrap{Wrap::Clamp, Wrap::Clamp});
+  CHECK(red_at(clamped, 0.2) == Approx(0.0).margin(0.02));
+  CHECK(red_at(clamped, 0.8) == Approx(0.0).margin(0.02));
 }
 
 TEST_CASE("a texture carried to a little fewer texels is averaged, not point-sampled", "[signal]") {
@@ -880,6 +932,45 @@ TEST_CASE("isocharts atlas --bake-texture carries the input's texture onto the a
     for (int c = 0; c < 3; ++c, ++n) sum += std::abs(a[c] - b[c]);
   }
   CHECK(sum / n < 0.02);
+  // A material that reads its image moved (map_Kd -s/-o) is baked as it reads: the baked atlas
+  // shows what a viewer of the input shows, not the image at the file's coordinates.
+  {
+    std::string obj = read_text(dir + "/in.obj");
+    const auto lib = obj.find("mtllib in.mtl");
+    REQUIRE(lib != std::string::npos);
+    obj.replace(lib, 13, "mtllib moved.mtl");
+    std::ofstream(dir + "/moved.obj") << obj;
+    std::string mtl = read_text(dir + "/in.mtl");
+    const auto map = mtl.find("map_Kd tex.png");
+    REQUIRE(map != std::string::npos);
+    mtl.replace(map, 14, "map_Kd -s 0.5 0.5 1 -o 0.25 0.25 0 tex.png");
+    std::ofstream(dir + "/moved.mtl") << mtl;
+  }
+  REQUIRE(run("-q atlas " + dir + "/moved.obj -o " + dir + "/moved_out.obj --width 256 --height 256 " +
+              "--max-l2 1.02 --bake-texture " + dir + "/moved.png") == 0);
+  {
+    const Image moved = read_image(dir + "/moved.png");
+    const Mesh mo = load_mesh(dir + "/moved_out.obj").mesh;
+    REQUIRE(mo.num_faces() == m.num_faces());
+    double as_read = 0, as_stored = 0;
+    for (int f = 0; f < m.num_faces(); ++f) {
+      auto centre = [&](const Mesh& mesh) {
+        const Face& t = mesh.face_uvs[f];
+        return (mesh.uvs[t[0]] + mesh.uvs[t[1]] + mesh.uvs[t[2]]) / 3.0;
+      };
+      float a[3], b[3], c[3];
+      const Vec2d p = centre(m), q = centre(mo);
+      sample_bilinear(tex, 0.5 * p.x + 0.25, 0.5 * p.y + 0.25, a);
+      sample_bilinear(tex, p.x, p.y, c);
+      sample_bilinear(moved, q.x, q.y, b);
+      for (int k = 0; k < 3; ++k) {
+        as_read += std::abs(a[k] - b[k]);
+        as_stored += std::abs(c[k] - b[k]);
+      }
+    }
+    CHECK(as_read / n < 0.02);
+    CHECK(as_stored / n > 0.05);
+  }
   // The glb embeds it: carried over once more from there, without naming a texture.
   CHECK(run("-q atlas " + dir + "/out.glb -o " + dir + "/again.glb --width 256 --height 256 --bake-texture " +
             dir + "/again.png") == 0);

@@ -54,12 +54,24 @@ struct Image {
   }
 };
 
-/// How texture lookups treat coordinates outside [0, 1].
-enum class Wrap { Clamp, Repeat };
+/// How texture lookups treat coordinates outside [0, 1]: the border texel, the texture again,
+/// or the texture mirrored every other time (glTF's CLAMP_TO_EDGE, REPEAT, MIRRORED_REPEAT).
+enum class Wrap { Clamp, Repeat, Mirror };
+
+/// How a material reads its texture outside [0, 1] along u and along v (glTF sampler
+/// wrapS / wrapT; OBJ `-clamp on` clamps both). Both formats repeat unless told otherwise.
+struct TextureWrap {
+  Wrap u = Wrap::Repeat;
+  Wrap v = Wrap::Repeat;
+};
 
 /// Bilinear lookup at texture coordinate (u, v) (v = 0 is the bottom row, texel centres at
-/// half-integers). Writes `image.channels` values to `out`.
-void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wrap = Wrap::Clamp);
+/// half-integers), wrapped along u by `wrap_u` and along v by `wrap_v`. Writes
+/// `image.channels` values to `out`.
+void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wrap_u, Wrap wrap_v);
+inline void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wrap = Wrap::Clamp) {
+  sample_bilinear(image, u, v, out, wrap, wrap);
+}
 
 /// Gives every texel not `filled` (one flag per texel, updated) the values of the nearest
 /// filled texel (4-neighbour steps, first reached wins in a fixed order), but for channel

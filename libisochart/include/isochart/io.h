@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "isochart/image.h"
 #include "isochart/mesh.h"
 #include "isochart/validate.h"
 
@@ -70,6 +71,13 @@ struct MeshTexture {
   /// The faces use more than one material (OBJ `usemtl` names, glTF primitives' materials), so
   /// this first material's texture is not every face's.
   bool several_materials = false;
+  /// How the material reads the image outside [0, 1] (glTF sampler wrapS / wrapT, OBJ
+  /// `-clamp on`).
+  TextureWrap wrap;
+  /// OBJ `map_Kd -s` and `-o`: the image is read at uv · uv_scale + uv_offset (as Blender and
+  /// three.js read them), not at the file's coordinates.
+  Vec2d uv_scale{1, 1};
+  Vec2d uv_offset{0, 0};
 };
 /// \throw InputError when the mesh file itself cannot be read; a texture named but missing is
 ///        returned by name (reading it then fails).

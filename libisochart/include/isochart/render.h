@@ -27,6 +27,10 @@ struct RenderOptions {
   int views = 1;
   ColorMode color = ColorMode::Shaded;
   const Image* texture = nullptr;  ///< the texture for ColorMode::Textured (not owned)
+  /// How the texture is read along an axis that some texture coordinate leaves [0, 1] along
+  /// (the material's sampler); along the others it is clamped, so an atlas does not bleed
+  /// across the texture's borders.
+  TextureWrap texture_wrap;
   /// Per-face chart ids (#F, ≥ 0) for ColorMode::Charts; overrides face_groups and UVs.
   std::vector<int> face_charts;
   bool wireframe = false;    ///< overlay the triangle edges (1 px dark lines)

@@ -24,9 +24,13 @@ struct Signal {
   Image texture;                      ///< mapped signals only
   std::vector<Vec2d> uvs;             ///< mapped: texture coordinates referenced by face_uvs
   std::vector<Face> face_uvs;         ///< mapped: #F indices into uvs
-  /// mapped: some texture coordinates leave [0, 1]², so the texture repeats (as `render` and
-  /// the glTF sampler read it); otherwise it is clamped at its borders.
+  /// mapped: some texture coordinates leave [0, 1]², so the texture is read as `wrap` says
+  /// there (repeated unless the material says otherwise); otherwise it is clamped at its
+  /// borders, as an atlas must be (set_texture_coordinates).
   bool tiling = false;
+  /// mapped: how the lookups wrap along u and v, the material's wrap on an axis whose
+  /// coordinates leave [0, 1], Clamp on the others (set_texture_coordinates).
+  TextureWrap wrap{Wrap::Clamp, Wrap::Clamp};
   /// mapped: texels of the image that were not opaque (alpha < 0.999). Alpha is not part of
   /// the signal (it is dropped from `texture`), so their colour counts as it is stored.
   long long transparent_texels = 0;
@@ -38,6 +42,10 @@ struct Signal {
   std::vector<float> face_lod;
 
   bool is_mapped() const { return !texture.empty(); }
+  /// Sets uvs and face_uvs, and `tiling` and `wrap` from them: `material` (how the file's
+  /// material reads its texture) on an axis some coordinate leaves [0, 1] along.
+  void set_texture_coordinates(const std::vector<Vec2d>& uvs, const std::vector<Face>& face_uvs,
+                               const TextureWrap& material = {});
   /// The signal at barycentric point (1 − b1 − b2, b1, b2) of face f, `dimension` values.
   void evaluate(const Mesh& mesh, int f, double b1, double b2, double* out) const;
 };
@@ -99,11 +107,12 @@ Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height)
 /// `supersample`² samples in it (point samples at texel centres alias where the new
 /// layout has fewer texels for a part than the old one); texels outside the charts are filled
 /// from the nearest chart, as bake_signal does, so that bilinear lookups and mipmaps do not
-/// bleed. A source coordinate outside [0, 1]² repeats the texture.
+/// bleed. A source coordinate outside [0, 1] reads the texture as `wrap` says (repeated by
+/// default) along that axis.
 /// \throw InputError when either mesh lacks texture coordinates on some face, the faces
 ///        differ in number, the size is not in 1..16384 or supersample is not in 1..4.
 Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& target, int width, int height,
-                       int supersample = 2);
+                       int supersample = 2, const TextureWrap& wrap = {});
 
 struct SaeResult {
   /// Signal approximation error: sqrt(∫_S |f − f̃|² dA / ∫_S dA), f the signal, f̃ its
