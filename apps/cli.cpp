@@ -398,9 +398,8 @@ isochart::Image read_mesh_texture(const isochart::MeshTexture& t, const std::str
 
 isochart::Mesh as_material_reads(const isochart::MeshTexture& t, const isochart::Mesh& mesh) {
   isochart::Mesh moved = mesh;
-  if (t.uv_scale == isochart::Vec2d{1, 1} && t.uv_offset == isochart::Vec2d{}) return moved;
-  for (isochart::Vec2d& uv : moved.uvs)
-    uv = {uv.x * t.uv_scale.x + t.uv_offset.x, uv.y * t.uv_scale.y + t.uv_offset.y};
+  if (t.uv_transform.identity()) return moved;
+  for (isochart::Vec2d& uv : moved.uvs) uv = t.uv_transform.apply(uv);
   return moved;
 }
 

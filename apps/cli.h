@@ -244,7 +244,7 @@ inline isochart::Signal load_signal(const Context& ctx, const std::string& spec,
 isochart::Image read_mesh_texture(const isochart::MeshTexture& t, const std::string& beside);
 
 /// `mesh` with its texture coordinates moved to where material `t` reads its image (OBJ
-/// `map_Kd -s/-o`: uv · scale + offset); `mesh` itself when the material moves none.
+/// `map_Kd -s/-o`, glTF KHR_texture_transform); `mesh` itself when the material moves none.
 isochart::Mesh as_material_reads(const isochart::MeshTexture& t, const isochart::Mesh& mesh);
 
 /// Seconds since `t0`.

@@ -823,6 +823,62 @@ bool keep_image_bytes(tinygltf::Image*, const int index, std::string*, std::stri
 
 }  // namespace
 
+namespace {
+
+// KHR_texture_transform: the image is read at T·R·S·uv in glTF's coordinates (v down), with
+// the rotation turning the coordinates counter-clockwise as the extension's example reads it
+// (offset [0, 1], rotation π/2, scale ½ picks the lower left quadrant), as three.js and
+// Blender do. Returned as the same map in the mesh's coordinates (v up, v_gltf = 1 − v).
+// `tex_coord` is overridden by the extension's own texCoord. False when a value is not a number
+// or not finite.
+bool read_texture_transform(const tinygltf::Value& ext, MeshTexture::UvTransform& out, int& tex_coord) {
+  if (!ext.IsObject()) return false;
+  bool ok = true;
+  auto number = [&](const tinygltf::Value& v, double fallback) {
+    if (!v.IsNumber()) {
+      ok = false;
+      return fallback;
+    }
+    const double x = v.GetNumberAsDouble();
+    ok = ok && std::isfinite(x);
+    return x;
+  };
+  auto pair = [&](const char* key, double fallback, double& x, double& y) {
+    x = y = fallback;
+    if (!ext.Has(key)) return;
+    const tinygltf::Value& v = ext.Get(key);
+    if (!v.IsArray() || v.ArrayLen() != 2) {
+      ok = false;
+      return;
+    }
+    x = number(v.Get(0), fallback);
+    y = number(v.Get(1), fallback);
+  };
+  double ox, oy, sx, sy;
+  pair("offset", 0, ox, oy);
+  pair("scale", 1, sx, sy);
+  const double r = ext.Has("rotation") ? number(ext.Get("rotation"), 0) : 0;
+  if (ext.Has("texCoord")) {
+    const tinygltf::Value& v = ext.Get("texCoord");
+    if (!v.IsInt() || v.GetNumberAsInt() < 0) return false;
+    tex_coord = v.GetNumberAsInt();
+  }
+  if (!ok) return false;
+  // In glTF's coordinates: u' = c·sx·u + s·sy·v + ox, v' = −s·sx·u + c·sy·v + oy.
+  const double c = std::cos(r), s = std::sin(r);
+  const double ga = c * sx, gb = s * sy, gd = -s * sx, ge = c * sy;
+  // Conjugated by the flip (u, v) ↦ (u, 1 − v).
+  out.a = ga;
+  out.b = -gb;
+  out.c = gb + ox;
+  out.d = -gd;
+  out.e = ge;
+  out.f = 1 - ge - oy;
+  return true;
+}
+
+}  // namespace
+
 MeshTexture gltf_texture(const std::string& path, std::string_view data, bool binary) {
   if (data.size() > 0xffffffffu) return {};
   std::map<int, std::string> images;
@@ -841,15 +897,19 @@ MeshTexture gltf_texture(const std::string& path, std::string_view data, bool bi
   const int tex = info.index;
   if (tex < 0 || tex >= static_cast<int>(model.textures.size())) return {};
   MeshTexture t;
-  // Only TEXCOORD_0 is read, untransformed: a texture mapped otherwise would be drawn or carried
+  // Only TEXCOORD_0 is read: a texture mapped through another set would be drawn or carried
   // over through the wrong coordinates.
-  if (info.texCoord != 0) {
-    t.problem = "its base-colour texture is mapped through TEXCOORD_" + std::to_string(info.texCoord) +
-                ", and only TEXCOORD_0 is read";
-    return t;
+  int tex_coord = info.texCoord;
+  const auto transform = info.extensions.find("KHR_texture_transform");
+  if (transform != info.extensions.end()) {
+    if (!read_texture_transform(transform->second, t.uv_transform, tex_coord)) {
+      t.problem = "its base-colour texture's KHR_texture_transform is malformed";
+      return t;
+    }
   }
-  if (info.extensions.count("KHR_texture_transform")) {
-    t.problem = "its base-colour texture is moved by KHR_texture_transform, which is not read";
+  if (tex_coord != 0) {
+    t.problem = "its base-colour texture is mapped through TEXCOORD_" + std::to_string(tex_coord) +
+                ", and only TEXCOORD_0 is read";
     return t;
   }
   std::set<int> used;

@@ -528,8 +528,11 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
         t.file = material_file(directory_of(mtl_path), map.file);
         t.several_materials = several;
         if (map.clamp) t.wrap = {Wrap::Clamp, Wrap::Clamp};
-        t.uv_scale = map.scale;
-        t.uv_offset = map.offset;
+        // As Blender and three.js read them: uv · scale + offset.
+        t.uv_transform.a = map.scale.x;
+        t.uv_transform.e = map.scale.y;
+        t.uv_transform.c = map.offset.x;
+        t.uv_transform.f = map.offset.y;
         return t;
       }
     }

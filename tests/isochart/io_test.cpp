@@ -800,11 +800,37 @@ TEST_CASE("glTF and OBJ: a texture named but unusable is said, by file or by rea
   doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"texCoord", 1}}}}}}};
   CHECK(find_mesh_texture(d.write("tc1.gltf", doc.dump())).problem ==
         "its base-colour texture is mapped through TEXCOORD_1, and only TEXCOORD_0 is read");
-  doc["materials"] = nlohmann::json::parse(
-      R"([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
-          "extensions": {"KHR_texture_transform": {"scale": [2, 2]}}}}}])");
-  CHECK_THAT(find_mesh_texture(d.write("tt.gltf", doc.dump())).problem,
-             Catch::Contains("KHR_texture_transform"));
+  // KHR_texture_transform is read, in the mesh's coordinates (v up; glTF's v runs down). The
+  // extension's own example picks the lower left quadrant of the image, turned: the mesh's
+  // corner (0, 0) (glTF (0, 1)) reads the image at glTF (0.5, 1), ours (0.5, 0).
+  auto transform_of = [&](const std::string& ext) {
+    doc["materials"] = nlohmann::json::parse(
+        R"([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": )" +
+        ext + "}}}}]");
+    return find_mesh_texture(d.write("tt.gltf", doc.dump()));
+  };
+  t = transform_of(R"({"offset": [0, 1], "rotation": 1.57079632679, "scale": [0.5, 0.5]})");
+  REQUIRE(t.problem.empty());
+  for (const auto& [from, to] : {std::pair<Vec2d, Vec2d>{{0, 0}, {0.5, 0}},
+                                 {{1, 1}, {0, 0.5}},
+                                 {{0, 1}, {0, 0}},
+                                 {{1, 0}, {0.5, 0.5}}}) {
+    CHECK(t.uv_transform.apply(from).x == Approx(to.x).margin(1e-9));
+    CHECK(t.uv_transform.apply(from).y == Approx(to.y).margin(1e-9));
+  }
+  // Its second example flips glTF's v, which in the mesh's coordinates is a flip as well.
+  t = transform_of(R"({"offset": [0, 1], "scale": [1, -1]})");
+  CHECK(t.uv_transform.apply({0.25, 0.125}).x == Approx(0.25));
+  CHECK(t.uv_transform.apply({0.25, 0.125}).y == Approx(0.875));
+  CHECK(transform_of(R"({"scale": [2, 2]})").uv_transform.apply({0.5, 0.5}).y ==
+        Approx(0));  // grows from glTF's top
+  // Its texCoord overrides the texture's; malformed values are said.
+  CHECK(transform_of(R"({"texCoord": 1})").problem ==
+        "its base-colour texture is mapped through TEXCOORD_1, and only TEXCOORD_0 is read");
+  CHECK(transform_of(R"({"scale": [2]})").problem ==
+        "its base-colour texture's KHR_texture_transform is malformed");
+  CHECK(transform_of(R"({"rotation": "a"})").problem ==
+        "its base-colour texture's KHR_texture_transform is malformed");
 }
 
 TEST_CASE("OBJ: map_Kd names with spaces, options, quotes and backslashes; several mtllib libraries",
@@ -827,12 +853,13 @@ TEST_CASE("OBJ: map_Kd names with spaces, options, quotes and backslashes; sever
   MeshTexture t = find_mesh_texture(d.write("m.obj", "mtllib m.mtl\n" + geometry));
   CHECK(t.file == want);
   CHECK((t.wrap.u == Wrap::Clamp && t.wrap.v == Wrap::Clamp));
-  CHECK((t.uv_scale.x == 2 && t.uv_scale.y == 3));
-  CHECK((t.uv_offset.x == 0.5 && t.uv_offset.y == -0.25));
+  CHECK(t.uv_transform.apply({1, 1}).x == 2.5);
+  CHECK(t.uv_transform.apply({1, 1}).y == 2.75);
+  CHECK((t.uv_transform.b == 0 && t.uv_transform.d == 0));
   d.write("m.mtl", "newmtl a\nmap_Kd -clamp off tex dir/my tex.png\n");
   t = find_mesh_texture(d.file("m.obj"));
   CHECK((t.wrap.u == Wrap::Repeat && t.wrap.v == Wrap::Repeat));
-  CHECK((t.uv_scale.x == 1 && t.uv_offset.y == 0));
+  CHECK(t.uv_transform.identity());
   // `mtllib` takes a list: the first library without the material is passed over.
   d.write("other.mtl", "newmtl b\nmap_Kd nothing.png\n");
   d.write("m.mtl", "newmtl a\nmap_Kd tex dir/my tex.png\n");

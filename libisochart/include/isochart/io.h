@@ -74,10 +74,15 @@ struct MeshTexture {
   /// How the material reads the image outside [0, 1] (glTF sampler wrapS / wrapT, OBJ
   /// `-clamp on`).
   TextureWrap wrap;
-  /// OBJ `map_Kd -s` and `-o`: the image is read at uv · uv_scale + uv_offset (as Blender and
-  /// three.js read them), not at the file's coordinates.
-  Vec2d uv_scale{1, 1};
-  Vec2d uv_offset{0, 0};
+  /// Where the material reads its image for the file's texture coordinates (OBJ `map_Kd -s`
+  /// and `-o`, glTF KHR_texture_transform), in the mesh's convention (v up).
+  struct UvTransform {
+    // (u, v) ↦ (a·u + b·v + c, d·u + e·v + f)
+    double a = 1, b = 0, c = 0, d = 0, e = 1, f = 0;
+    bool identity() const { return a == 1 && b == 0 && c == 0 && d == 0 && e == 1 && f == 0; }
+    Vec2d apply(const Vec2d& uv) const { return {a * uv.x + b * uv.y + c, d * uv.x + e * uv.y + f}; }
+  };
+  UvTransform uv_transform;
 };
 /// \throw InputError when the mesh file itself cannot be read; a texture named but missing is
 ///        returned by name (reading it then fails).
