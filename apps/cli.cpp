@@ -379,7 +379,8 @@ void check_atlas_matches(const isochart::Mesh& input, const isochart::Mesh& atla
   }
 }
 
-isochart::Image read_mesh_texture(const isochart::MeshTexture& t, const std::string& beside) {
+isochart::Image read_mesh_texture(const isochart::MeshTexture& t, const std::string& beside,
+                                  const std::string& mesh) {
   if (!t.file.empty()) return isochart::read_image(t.file);
   if (t.bytes.empty()) return {};
   const std::string tmp = isochart::temporary_path(beside, t.extension);
@@ -388,12 +389,24 @@ isochart::Image read_mesh_texture(const isochart::MeshTexture& t, const std::str
   try {
     std::ofstream(tmp, std::ios::binary).write(t.bytes.data(), static_cast<std::streamsize>(t.bytes.size()));
     image = isochart::read_image(tmp);
+  } catch (const isochart::InputError& e) {
+    // The temporary file's name means nothing to the user: the image is the mesh file's.
+    isochart::remove_temporary_file(tmp);
+    throw isochart::InputError(mesh, std::string("its embedded texture image: ") + e.what());
   } catch (...) {
     isochart::remove_temporary_file(tmp);
     throw;
   }
   isochart::remove_temporary_file(tmp);
   return image;
+}
+
+void check_material_coordinates(const std::string& file, const isochart::Mesh& moved) {
+  for (const isochart::Vec2d& uv : moved.uvs)
+    if (!isochart::is_finite(uv))
+      throw isochart::InputError(file,
+                                 "its material's texture map (map_Kd -s/-o or KHR_texture_transform) moves "
+                                 "texture coordinates beyond any number");
 }
 
 isochart::Mesh as_material_reads(const isochart::MeshTexture& t, const isochart::Mesh& mesh) {

@@ -240,12 +240,18 @@ inline isochart::Signal load_signal(const Context& ctx, const std::string& spec,
 /// The image of a texture a mesh file names or carries (isochart::find_mesh_texture): read from
 /// its file, or decoded from its embedded bytes through a temporary file beside `beside` (the
 /// image library reads files). Empty when `t` names none.
-/// \throw isochart::InputError when the image cannot be read.
-isochart::Image read_mesh_texture(const isochart::MeshTexture& t, const std::string& beside);
+/// \throw isochart::InputError when the image cannot be read, naming its file, or `mesh`
+///        for an embedded one.
+isochart::Image read_mesh_texture(const isochart::MeshTexture& t, const std::string& beside,
+                                  const std::string& mesh);
 
 /// `mesh` with its texture coordinates moved to where material `t` reads its image (OBJ
 /// `map_Kd -s/-o`, glTF KHR_texture_transform); `mesh` itself when the material moves none.
 isochart::Mesh as_material_reads(const isochart::MeshTexture& t, const isochart::Mesh& mesh);
+
+/// \throw isochart::InputError naming `file` when some texture coordinate of `moved` (the
+///        file's, moved by its materials' maps) is not finite: a map so large it overflows.
+void check_material_coordinates(const std::string& file, const isochart::Mesh& moved);
 
 /// Seconds since `t0`.
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {

@@ -88,12 +88,77 @@ void check_bake_outputs(const AtlasArgs& a) {
   }
 }
 
+// What --bake-texture carries over: the images (or colours) faces read and the texture
+// coordinates they read them at, as the input's materials read them.
+struct Carry {
+  std::vector<isochart::TextureSource> sources;
+  std::vector<int> face_source;  // per face, into sources
+  isochart::Mesh source;         // the input with the coordinates the materials read
+  bool empty() const { return sources.empty(); }
+};
+
+// The input's materials, each face reading its own (an OBJ's `usemtl`, a glTF primitive's
+// material): images read once each, coordinates moved per face by its material's map.
+Carry carry_materials(const Context& ctx, const AtlasArgs& a, const isochart::Mesh& mesh) {
+  const std::vector<isochart::MeshTexture> textures = isochart::find_material_textures(a.input, mesh);
+  Carry c;
+  const int nf = mesh.num_faces();
+  std::vector<int> source_of(textures.size(), -1);
+  int plain = -1;  // faces of no material, or of one no file defines: white, as viewers show them
+  long long untextured = 0;
+  std::vector<std::string> inputs;
+  c.face_source.resize(nf);
+  for (int f = 0; f < nf; ++f) {
+    const int m = mesh.face_materials[f];
+    int& slot = m >= 0 && m < static_cast<int>(textures.size()) ? source_of[m] : plain;
+    if (slot < 0) {
+      slot = static_cast<int>(c.sources.size());
+      c.sources.emplace_back();
+      if (&slot != &plain) {
+        const isochart::MeshTexture& t = textures[m];
+        const std::string label = m < static_cast<int>(mesh.material_names.size())
+                                      ? "material " + mesh.material_names[m]
+                                      : "material " + std::to_string(m);
+        if (!t.problem.empty()) throw isochart::InputError(a.input, t.problem + " (" + label + ")");
+        c.sources.back().image = read_mesh_texture(t, a.bake_texture, a.input);
+        c.sources.back().wrap = t.wrap;
+        c.sources.back().colour = t.colour;
+        if (!t.file.empty()) inputs.push_back(t.file);
+      }
+    }
+    if (c.sources[slot].image.empty()) ++untextured;
+    c.face_source[f] = slot;
+  }
+  // A material's texture belongs to the input model: baking over it would break the model.
+  ctx.check_paths(inputs, {a.bake_texture});
+  if (untextured == nf)
+    throw isochart::InputError(
+        a.input, "names no texture to carry over (--bake-texture); give one with --texture IMG");
+  if (untextured > 0)
+    ctx.warn(a.input, std::to_string(untextured) + (untextured == 1 ? " face reads" : " faces read") +
+                          " no texture in its material; baked in the material's colour");
+  c.source = mesh;
+  c.source.uvs.clear();
+  c.source.uvs.reserve(3 * static_cast<std::size_t>(nf));
+  for (int f = 0; f < nf; ++f) {
+    const int m = mesh.face_materials[f];
+    const bool moved = m >= 0 && m < static_cast<int>(textures.size());
+    for (int k = 0; k < 3; ++k) {
+      const isochart::Vec2d uv = mesh.uvs[mesh.face_uvs[f][k]];
+      c.source.uvs.push_back(moved ? textures[m].uv_transform.apply(uv) : uv);
+      c.source.face_uvs[f][k] = 3 * f + k;
+    }
+  }
+  check_material_coordinates(a.input, c.source);
+  return c;
+}
+
 // The texture --bake-texture carries over (--texture, else `named`, the one the input names
-// or embeds), read before any work so that a missing one fails at once. Without
-// --bake-texture, a texture the input carries is not in the outputs, whose texture
-// coordinates are new: said in a warning, with the remedy.
-isochart::Image texture_to_carry(const Context& ctx, const AtlasArgs& a, const isochart::LoadResult& in,
-                                 const isochart::MeshTexture& named) {
+// or embeds, or each face its own material's), read before any work so that a missing one
+// fails at once. Without --bake-texture, a texture the input carries is not in the outputs,
+// whose texture coordinates are new: said in a warning, with the remedy.
+Carry texture_to_carry(const Context& ctx, const AtlasArgs& a, const isochart::LoadResult& in,
+                       const isochart::MeshTexture& named) {
   if (a.bake_texture.empty()) {
     if (!in.mesh.has_uvs() || a.input.rfind("builtin:", 0) == 0) return {};
     const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
@@ -112,21 +177,28 @@ isochart::Image texture_to_carry(const Context& ctx, const AtlasArgs& a, const i
                                             (without == 1 ? " face has" : " faces have") +
                                             " no texture coordinates to carry the texture over through "
                                             "(--bake-texture)");
-  if (!a.texture.empty()) return isochart::read_image(a.texture);
-  const isochart::MeshTexture& t = named;
-  if (!t.problem.empty()) throw isochart::InputError(a.input, t.problem + " (--texture IMG names one)");
-  // One texture is carried over: from a file whose faces use several, most would read another
-  // texture than their own.
-  if (t.several_materials)
-    throw isochart::InputError(
-        a.input,
-        "uses several materials, and --bake-texture carries one texture over; when all "
-        "its faces read one image, name it with --texture IMG");
-  isochart::Image image = read_mesh_texture(t, a.bake_texture);
-  if (image.empty())
-    throw isochart::InputError(
-        a.input, "names no texture to carry over (--bake-texture); give one with --texture IMG");
-  return image;
+  // Faces of several materials each read their own, unless --texture names one image for all.
+  if (a.texture.empty() && named.several_materials && !in.mesh.face_materials.empty())
+    return carry_materials(ctx, a, in.mesh);
+  Carry c;
+  c.sources.emplace_back();
+  if (!a.texture.empty()) {
+    c.sources[0].image = isochart::read_image(a.texture);
+  } else {
+    const isochart::MeshTexture& t = named;
+    if (!t.problem.empty()) throw isochart::InputError(a.input, t.problem + " (--texture IMG names one)");
+    c.sources[0].image = read_mesh_texture(t, a.bake_texture, a.input);
+    if (c.sources[0].image.empty())
+      throw isochart::InputError(
+          a.input, "names no texture to carry over (--bake-texture); give one with --texture IMG");
+  }
+  // Read as the input's material reads its texture (its wrap and map transform), whichever
+  // image --texture names.
+  c.sources[0].wrap = named.wrap;
+  c.face_source.assign(in.mesh.faces.size(), 0);
+  c.source = as_material_reads(named, in.mesh);
+  check_material_coordinates(a.input, c.source);
+  return c;
 }
 
 void run_atlas(const Context& ctx, AtlasArgs a) {
@@ -190,7 +262,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   }
 
   isochart::LoadResult in = ctx.load(a.input);
-  const isochart::Image source_texture = texture_to_carry(ctx, a, in, named_texture);
+  const Carry carry = texture_to_carry(ctx, a, in, named_texture);
   const double load_seconds = seconds_since(t0);
   isochart::Signal signal;
   isochart::SignalAtlasStats sig_stats;
@@ -236,16 +308,13 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   }
   double bake_seconds = 0;
   bool bake_transparent = false;  // the outputs' materials then blend the texture's alpha
-  if (!source_texture.empty()) {
+  if (!carry.empty()) {
     const auto t_bake = std::chrono::steady_clock::now();
     // At the packing size, 2×2 samples a texel up to 2048² (the bake then holds about 440 MB).
     const int w = a.options.pack.width, h = a.options.pack.height;
     const int supersample = static_cast<long long>(w) * h <= 2048LL * 2048 ? 2 : 1;
-    // Read as the input's material reads its texture (its wrap and map transform), whichever
-    // image --texture names.
-    const isochart::Image baked =
-        isochart::transfer_texture(as_material_reads(named_texture, in.mesh), source_texture, out_mesh, w, h,
-                                   supersample, named_texture.wrap);
+    const isochart::Image baked = isochart::transfer_textures(carry.source, carry.sources, carry.face_source,
+                                                              out_mesh, w, h, supersample);
     const std::string ext = lower_extension(a.bake_texture);
     const int alpha = baked.alpha_channel();
     long long transparent = 0;
@@ -266,7 +335,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     isochart::SaveOptions so;
     so.texture_transparent = bake_transparent;
     if (a.keep_face_order) so.write_groups = isochart::ObjGroups::FaceOrder;
-    if (!source_texture.empty()) {
+    if (!carry.empty()) {
       const isochart::MeshFormat f = isochart::format_from_path(out);
       // An OBJ's material names the image relative to the OBJ; glb embeds it; PLY has no materials.
       if (f == isochart::MeshFormat::Obj) {

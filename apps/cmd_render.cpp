@@ -145,10 +145,11 @@ void run_render(const Context& ctx, const RenderArgs& a) {
       if (t.several_materials)
         ctx.warn(a.input, "uses several materials; every face is drawn with the first one's texture");
       try {
-        texture = read_mesh_texture(t, a.output);
+        texture = read_mesh_texture(t, a.output, a.input);
         if (!texture.empty()) {
           own = t.file.empty() ? "embedded" : t.file;
           mesh = as_material_reads(t, mesh);
+          check_material_coordinates(a.input, mesh);
           o.texture_wrap = t.wrap;
         }
       } catch (const isochart::InputError& e) {

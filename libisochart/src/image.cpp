@@ -174,6 +174,16 @@ void sample_bilinear(const Image& image, double u, double v, float* out, Wrap wr
     return;
   }
   if (!std::isfinite(u) || !std::isfinite(v)) u = v = 0;
+  // Far out (a material scaling its coordinates by 1e300), u · width would overflow and the
+  // filter weights turn NaN: the coordinate is first brought into its period, or to the border.
+  auto reduce = [](double t, Wrap wrap) {
+    if (std::abs(t) < 1e6) return t;
+    if (wrap == Wrap::Clamp) return t < 0 ? -1.0 : 2.0;
+    const double period = wrap == Wrap::Mirror ? 2.0 : 1.0;
+    return t - period * std::floor(t / period);
+  };
+  u = reduce(u, wrap_u);
+  v = reduce(v, wrap_v);
   // Texel (x, y) covers [x, x+1] × [y, y+1] in pixel units with its centre at +0.5; rows
   // count from the top while v counts from the bottom.
   const double px = u * w - 0.5, py = (1.0 - v) * h - 0.5;

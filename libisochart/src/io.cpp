@@ -265,6 +265,15 @@ MeshTexture find_mesh_texture(const std::string& path) {
   return fmt == MeshFormat::Obj ? obj_texture(path, data) : gltf_texture(path, data, fmt == MeshFormat::Glb);
 }
 
+std::vector<MeshTexture> find_material_textures(const std::string& path, const Mesh& mesh) {
+  if (mesh.face_materials.empty()) return {};
+  const MeshFormat fmt = format_from_path(path);
+  if (fmt != MeshFormat::Obj && fmt != MeshFormat::Gltf && fmt != MeshFormat::Glb) return {};
+  const std::string data = read_file(path);
+  return fmt == MeshFormat::Obj ? obj_textures(path, data, mesh.material_names)
+                                : gltf_textures(path, data, fmt == MeshFormat::Glb);
+}
+
 namespace {
 
 // Used vertices at the bit-identical position of an earlier used vertex (−0 equal to +0).

@@ -358,6 +358,7 @@ class GltfReader {
                                                                   uv_base + static_cast<int>(b),
                                                                   uv_base + static_cast<int>(c)});
         raw_.polygon_groups.push_back(group);
+        raw_.polygon_materials.push_back(p.material < 0 ? -1 : p.material);
         with_uvs_ += uv_base < 0 ? 0 : 1;
       };
       if (mode == TINYGLTF_MODE_TRIANGLES) {
@@ -879,24 +880,26 @@ bool read_texture_transform(const tinygltf::Value& ext, MeshTexture::UvTransform
 
 }  // namespace
 
-MeshTexture gltf_texture(const std::string& path, std::string_view data, bool binary) {
-  if (data.size() > 0xffffffffu) return {};
-  std::map<int, std::string> images;
-  tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(keep_image_bytes, &images);
-  tinygltf::Model model;
-  std::string err;
-  bool ok = false;
-  try {
-    ok = parse_gltf(loader, path, data, binary, model, err);
-  } catch (const std::exception&) {
-    ok = false;
-  }
-  if (!ok || model.materials.empty()) return {};
-  const tinygltf::TextureInfo& info = model.materials[0].pbrMetallicRoughness.baseColorTexture;
-  const int tex = info.index;
-  if (tex < 0 || tex >= static_cast<int>(model.textures.size())) return {};
+namespace {
+
+MeshTexture material_texture(const std::string& path, const tinygltf::Model& model,
+                             std::map<int, std::string>& images, const tinygltf::Material& material) {
   MeshTexture t;
+  const auto& factor = material.pbrMetallicRoughness.baseColorFactor;
+  if (factor.size() >= 3 && std::isfinite(factor[0]) && std::isfinite(factor[1]) && std::isfinite(factor[2]))
+    t.colour = {factor[0], factor[1], factor[2]};
+  const tinygltf::TextureInfo& info = material.pbrMetallicRoughness.baseColorTexture;
+  const int tex = info.index;
+  if (tex < 0 && tex != -1) {
+    t.problem = "its base-colour texture index " + std::to_string(tex) + " is invalid";
+    return t;
+  }
+  if (tex < 0) return t;
+  if (tex >= static_cast<int>(model.textures.size())) {
+    t.problem = "its base-colour texture index " + std::to_string(tex) + " is out of range (" +
+                std::to_string(model.textures.size()) + " textures)";
+    return t;
+  }
   // Only TEXCOORD_0 is read: a texture mapped through another set would be drawn or carried
   // over through the wrong coordinates.
   int tex_coord = info.texCoord;
@@ -912,10 +915,6 @@ MeshTexture gltf_texture(const std::string& path, std::string_view data, bool bi
                 ", and only TEXCOORD_0 is read";
     return t;
   }
-  std::set<int> used;
-  for (const tinygltf::Mesh& mesh : model.meshes)
-    for (const tinygltf::Primitive& prim : mesh.primitives) used.insert(prim.material);
-  t.several_materials = used.size() > 1;
   // glTF's sampler wraps: REPEAT (also the default without a sampler), CLAMP_TO_EDGE,
   // MIRRORED_REPEAT.
   const int sampler = model.textures[tex].sampler;
@@ -954,7 +953,7 @@ MeshTexture gltf_texture(const std::string& path, std::string_view data, bool bi
     t.problem = "its base-colour image is empty or cannot be decoded";
     return t;
   }
-  t.bytes = std::move(found->second);
+  t.bytes = found->second;  // materials may share an image
   const bool png = t.bytes.size() >= 4 && t.bytes.compare(0, 4, "\x89PNG") == 0;
   const bool jpeg = t.bytes.size() >= 2 && static_cast<unsigned char>(t.bytes[0]) == 0xFF &&
                     static_cast<unsigned char>(t.bytes[1]) == 0xD8;
@@ -965,6 +964,38 @@ MeshTexture gltf_texture(const std::string& path, std::string_view data, bool bi
   }
   t.extension = png ? ".png" : ".jpg";
   return t;
+}
+
+}  // namespace
+
+std::vector<MeshTexture> gltf_textures(const std::string& path, std::string_view data, bool binary) {
+  if (data.size() > 0xffffffffu) return {};
+  std::map<int, std::string> images;
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(keep_image_bytes, &images);
+  tinygltf::Model model;
+  std::string err;
+  bool ok = false;
+  try {
+    ok = parse_gltf(loader, path, data, binary, model, err);
+  } catch (const std::exception&) {
+    ok = false;
+  }
+  if (!ok) return {};
+  std::set<int> used;
+  for (const tinygltf::Mesh& mesh : model.meshes)
+    for (const tinygltf::Primitive& prim : mesh.primitives) used.insert(prim.material);
+  std::vector<MeshTexture> out;
+  for (const tinygltf::Material& material : model.materials) {
+    out.push_back(material_texture(path, model, images, material));
+    out.back().several_materials = used.size() > 1;
+  }
+  return out;
+}
+
+MeshTexture gltf_texture(const std::string& path, std::string_view data, bool binary) {
+  std::vector<MeshTexture> all = gltf_textures(path, data, binary);
+  return all.empty() ? MeshTexture{} : std::move(all.front());
 }
 
 }  // namespace isochart::io_detail

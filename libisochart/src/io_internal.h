@@ -21,6 +21,10 @@ RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, c
 /// find_mesh_texture for each format (`data` is the whole mesh file).
 MeshTexture obj_texture(const std::string& path, std::string_view data);
 MeshTexture gltf_texture(const std::string& path, std::string_view data, bool binary);
+/// Every material's texture, in the numbering of Mesh::face_materials.
+std::vector<MeshTexture> obj_textures(const std::string& path, std::string_view data,
+                                      const std::vector<std::string>& materials);
+std::vector<MeshTexture> gltf_textures(const std::string& path, std::string_view data, bool binary);
 /// Joins vertices at bit-identical positions (glTF splits them at attribute seams).
 void weld_equal_positions(RawMesh& raw);
 

@@ -58,6 +58,10 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
   // Group ids in order of first use by a face, so that a name with no faces takes none.
   std::unordered_map<std::string, int> group_ids;
   std::vector<int> groups;
+  // Materials likewise by `usemtl` name in order of first use (obj_textures numbers them so).
+  std::unordered_map<std::string, int> material_ids;
+  std::vector<int> materials;
+  int current_material = -1;
   std::string group_name;
   int current_group = -1;  // id of group_name, -1 until a face uses it
   bool saw_group = false;
@@ -198,6 +202,7 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
       if (current_group < 0)  // faces before any g/o form the unnamed group
         current_group = group_ids.emplace(group_name, static_cast<int>(group_ids.size())).first->second;
       groups.push_back(current_group);
+      materials.push_back(current_material);
       raw.polygons.push_back(poly);
       polygon_uvs.push_back(poly_uv);
       faces_with_uv += with_uv ? 1 : 0;
@@ -210,6 +215,12 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
       saw_group = true;
       group_name = std::move(name);
       current_group = -1;
+    } else if (key == "usemtl") {
+      std::size_t i = 0;
+      while (i < rest.size() && is_space(rest[i])) ++i;
+      std::string name(rest.substr(i));
+      while (!name.empty() && is_space(name.back())) name.pop_back();
+      current_material = material_ids.emplace(name, static_cast<int>(material_ids.size())).first->second;
     } else if (key == "l" || key == "p") {
       ++ignored_elements;
     } else if (is_ignored_statement(key)) {
@@ -277,6 +288,11 @@ RawMesh read_obj(const std::string& path, std::string_view data, const LoadOptio
   }
 
   if (saw_group) raw.polygon_groups = std::move(groups);
+  if (!material_ids.empty()) {
+    raw.polygon_materials = std::move(materials);
+    raw.material_names.resize(material_ids.size());
+    for (auto& [name, id] : material_ids) raw.material_names[id] = name;
+  }
   if (ignored_elements > 0)
     raw.warnings.push_back("ignored " + std::to_string(ignored_elements) +
                            " line and point elements ('l', 'p')");
@@ -428,7 +444,7 @@ MapStatement map_statement(std::string_view rest) {
     for (int i = 0; i < values; ++i) {
       std::string_view ahead = rest;
       const std::string_view value = take_word(ahead);
-      if (value.empty() || (numeric && i > 0 && !is_number(value))) break;
+      if (value.empty() || (numeric && !is_number(value))) break;  // `-s tex.png`: no value
       rest = ahead;
       if (word == "-clamp") m.clamp = value == "on";
       if ((word == "-s" || word == "-o") && i < 2 && is_number(value)) {
@@ -477,10 +493,16 @@ std::vector<std::string> material_libraries(const std::string& dir, std::string_
 
 }  // namespace
 
-MeshTexture obj_texture(const std::string& path, std::string_view data) {
+namespace {
+
+// The `mtllib` libraries an OBJ names and its `usemtl` names in order of first use.
+struct ObjMaterials {
   std::vector<std::string> libraries;
-  std::string material;
-  bool several = false;
+  std::vector<std::string> used;
+};
+
+ObjMaterials obj_materials(const std::string& path, std::string_view data) {
+  ObjMaterials m;
   for (std::size_t at = 0; at < data.size();) {
     std::size_t end = data.find('\n', at);
     if (end == std::string_view::npos) end = data.size();
@@ -489,16 +511,19 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
     std::string_view rest;
     if (after_keyword(line, "mtllib", rest)) {
       for (std::string& lib : material_libraries(directory_of(path), rest))
-        libraries.push_back(std::move(lib));
+        m.libraries.push_back(std::move(lib));
     } else if (after_keyword(line, "usemtl", rest)) {
-      if (material.empty())
-        material = std::string(rest);
-      else
-        several = several || rest != material;
+      if (std::find(m.used.begin(), m.used.end(), rest) == m.used.end()) m.used.emplace_back(rest);
     }
   }
+  return m;
+}
+
+// Material `material`'s texture and colour from the first library defining it (the first
+// material of the first readable library when `material` is empty).
+MeshTexture material_texture(const std::vector<std::string>& libraries, const std::string& material) {
   std::string unreadable;
-  bool defined = false;  // the material used is defined in a library read
+  bool defined = false;  // the material is defined in a library read
   for (const std::string& mtl_path : libraries) {
     std::string mtl;
     try {
@@ -510,6 +535,7 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
       continue;
     }
     bool in_material = false, seen_material = false;
+    MeshTexture t;
     for (std::size_t at = 0; at < mtl.size();) {
       std::size_t end = mtl.find('\n', at);
       if (end == std::string::npos) end = mtl.size();
@@ -521,21 +547,32 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
         in_material = material.empty() ? !seen_material : rest == material;
         seen_material = true;
         defined = defined || in_material;
-      } else if (in_material && after_keyword(line, "map_Kd", rest)) {
+      } else if (in_material && after_keyword(line, "Kd", rest)) {
+        double c[3];
+        int n = 0;
+        for (std::string_view r = rest; n < 3 && !trim(r).empty(); ++n) {
+          r = trim(r);
+          const std::size_t stop = r.find_first_of(" \t");
+          const std::string word(r.substr(0, stop));
+          char* after = nullptr;
+          c[n] = std::strtod(word.c_str(), &after);
+          if (after == word.c_str() || *after != '\0' || !std::isfinite(c[n])) break;
+          r = stop == std::string_view::npos ? std::string_view() : r.substr(stop);
+        }
+        if (n == 3) t.colour = {c[0], c[1], c[2]};
+      } else if (in_material && t.file.empty() && after_keyword(line, "map_Kd", rest)) {
         const MapStatement map = map_statement(rest);
         if (map.file.empty()) continue;
-        MeshTexture t;
         t.file = material_file(directory_of(mtl_path), map.file);
-        t.several_materials = several;
         if (map.clamp) t.wrap = {Wrap::Clamp, Wrap::Clamp};
         // As Blender and three.js read them: uv · scale + offset.
         t.uv_transform.a = map.scale.x;
         t.uv_transform.e = map.scale.y;
         t.uv_transform.c = map.offset.x;
         t.uv_transform.f = map.offset.y;
-        return t;
       }
     }
+    if (defined || (material.empty() && seen_material)) return t;
   }
   MeshTexture none;
   none.problem = unreadable;
@@ -543,6 +580,26 @@ MeshTexture obj_texture(const std::string& path, std::string_view data) {
   if (none.problem.empty() && !material.empty() && !libraries.empty() && !defined)
     none.problem = "its material " + material + " is defined in no material library it names";
   return none;
+}
+
+}  // namespace
+
+MeshTexture obj_texture(const std::string& path, std::string_view data) {
+  const ObjMaterials m = obj_materials(path, data);
+  MeshTexture t = material_texture(m.libraries, m.used.empty() ? std::string() : m.used.front());
+  t.several_materials = m.used.size() > 1;
+  return t;
+}
+
+std::vector<MeshTexture> obj_textures(const std::string& path, std::string_view data,
+                                      const std::vector<std::string>& materials) {
+  const ObjMaterials m = obj_materials(path, data);
+  std::vector<MeshTexture> out;
+  for (const std::string& name : materials) {
+    out.push_back(material_texture(m.libraries, name));
+    out.back().several_materials = materials.size() > 1;
+  }
+  return out;
 }
 
 }  // namespace isochart::io_detail

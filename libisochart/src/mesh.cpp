@@ -262,7 +262,9 @@ SubMesh extract_submesh(const Mesh& parent, const std::vector<int>& faces) {
       s.mesh.face_uvs.push_back(t);
     }
     if (!parent.face_groups.empty()) s.mesh.face_groups.push_back(parent.face_groups[pf]);
+    if (!parent.face_materials.empty()) s.mesh.face_materials.push_back(parent.face_materials[pf]);
   }
+  if (!s.mesh.face_materials.empty()) s.mesh.material_names = parent.material_names;
   s.mesh.positions.reserve(s.vertex_to_parent.size());
   for (int pv : s.vertex_to_parent) {
     s.mesh.positions.push_back(parent.positions[pv]);

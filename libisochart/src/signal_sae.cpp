@@ -67,25 +67,12 @@ void check_size(int w, int h) {
 
 }  // namespace
 
-Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height) {
-  if (!mesh.has_uvs()) throw InputError("", "cannot bake a signal: mesh has no texture coordinates");
-  check_size(width, height);
-  if (signal.dimension < 1 || signal.dimension > 16)
-    throw InputError("", "signal must have 1 to 16 channels");
-  if (static_cast<int>(mesh.face_uvs.size()) != mesh.num_faces())
-    throw InputError("", "cannot bake a signal: texture coordinates for " +
-                             std::to_string(mesh.face_uvs.size()) + " faces, the mesh has " +
-                             std::to_string(mesh.num_faces()));
-  if (!signal.is_mapped() &&
-      signal.vertex_values.size() != static_cast<size_t>(mesh.num_vertices()) * signal.dimension)
-    throw InputError("", "signal has values for " +
-                             std::to_string(signal.vertex_values.size() / signal.dimension) +
-                             " vertices, the mesh has " + std::to_string(mesh.num_vertices()));
-  if (signal.is_mapped() && static_cast<int>(signal.face_uvs.size()) != mesh.num_faces())
-    throw InputError("", "mapped signal has texture coordinates for " +
-                             std::to_string(signal.face_uvs.size()) + " faces, the mesh has " +
-                             std::to_string(mesh.num_faces()));
-  const int dim = signal.dimension;
+namespace {
+
+// bake_signal's work for any signal: `evaluate(f, b1, b2, out)` writes `dim` values at
+// barycentric point (1 − b1 − b2, b1, b2) of face f.
+template <class Evaluate>
+Image bake_faces(const Mesh& mesh, int dim, int width, int height, const Evaluate& evaluate) {
   Image img(width, height, dim, 0.0f);
   const size_t n = static_cast<size_t>(width) * height;
   std::vector<double> dist(n, kInf);
@@ -112,7 +99,7 @@ Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height)
         const size_t i = static_cast<size_t>(y) * width + x;
         if (d > kReach || !(d < dist[i])) continue;
         dist[i] = d;
-        signal.evaluate(mesh, f, b1, b2, value.data());
+        evaluate(f, b1, b2, value.data());
         for (int c = 0; c < dim; ++c) img.pixels[i * dim + c] = static_cast<float>(value[c]);
       }
   }
@@ -163,8 +150,44 @@ Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height)
   return img;
 }
 
+}  // namespace
+
+Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height) {
+  if (!mesh.has_uvs()) throw InputError("", "cannot bake a signal: mesh has no texture coordinates");
+  check_size(width, height);
+  if (signal.dimension < 1 || signal.dimension > 16)
+    throw InputError("", "signal must have 1 to 16 channels");
+  if (static_cast<int>(mesh.face_uvs.size()) != mesh.num_faces())
+    throw InputError("", "cannot bake a signal: texture coordinates for " +
+                             std::to_string(mesh.face_uvs.size()) + " faces, the mesh has " +
+                             std::to_string(mesh.num_faces()));
+  if (!signal.is_mapped() &&
+      signal.vertex_values.size() != static_cast<size_t>(mesh.num_vertices()) * signal.dimension)
+    throw InputError("", "signal has values for " +
+                             std::to_string(signal.vertex_values.size() / signal.dimension) +
+                             " vertices, the mesh has " + std::to_string(mesh.num_vertices()));
+  if (signal.is_mapped() && static_cast<int>(signal.face_uvs.size()) != mesh.num_faces())
+    throw InputError("", "mapped signal has texture coordinates for " +
+                             std::to_string(signal.face_uvs.size()) + " faces, the mesh has " +
+                             std::to_string(mesh.num_faces()));
+  return bake_faces(mesh, signal.dimension, width, height,
+                    [&](int f, double b1, double b2, double* out) { signal.evaluate(mesh, f, b1, b2, out); });
+}
+
 Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& target, int width, int height,
                        int supersample, const TextureWrap& wrap) {
+  if (texture.empty() || texture.channels < 1 || texture.channels > 16)
+    throw InputError("", "cannot transfer a texture of " + std::to_string(texture.channels) + " channels");
+  std::vector<TextureSource> sources(1);
+  sources[0].image = texture;
+  sources[0].wrap = wrap;
+  return transfer_textures(source, sources, std::vector<int>(source.faces.size(), 0), target, width, height,
+                           supersample);
+}
+
+Image transfer_textures(const Mesh& source, const std::vector<TextureSource>& sources,
+                        const std::vector<int>& face_source, const Mesh& target, int width, int height,
+                        int supersample) {
   const int nf = target.num_faces();
   if (source.num_faces() != nf)
     throw InputError("", "cannot transfer a texture between meshes of " + std::to_string(source.num_faces()) +
@@ -173,17 +196,52 @@ Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& tar
     if (!m->has_uvs() || static_cast<int>(m->face_uvs.size()) != nf)
       throw InputError("", std::string("cannot transfer a texture: the ") +
                                (m == &source ? "source" : "target") + " mesh has no texture coordinates");
-  if (texture.empty() || texture.channels < 1 || texture.channels > 16)
-    throw InputError("", "cannot transfer a texture of " + std::to_string(texture.channels) + " channels");
+  const int ns = static_cast<int>(sources.size());
+  if (ns == 0) throw InputError("", "cannot transfer a texture: no texture given");
+  if (static_cast<int>(face_source.size()) != nf)
+    throw InputError("", "cannot transfer a texture: sources named for " +
+                             std::to_string(face_source.size()) + " of " + std::to_string(nf) + " faces");
+  for (int f = 0; f < nf; ++f)
+    if (face_source[f] < 0 || face_source[f] >= ns)
+      throw InputError("", "cannot transfer a texture: face " + std::to_string(f) + " names source " +
+                               std::to_string(face_source[f]) + " of " + std::to_string(ns));
   if (supersample < 1 || supersample > 4)
     throw InputError("", "texture supersampling must be 1 to 4, got " + std::to_string(supersample));
   check_size(width, height);
   check_size(width * supersample, height * supersample);
-  const int channels = texture.channels, alpha = texture.alpha_channel();
-  Signal s;
-  s.dimension = channels;
-  s.texture = texture;
-  s.set_texture_coordinates(source.uvs, source.face_uvs, wrap);
+
+  // The result's channels: one image's own; several images (and colours) meet in grey or RGB,
+  // with alpha when any has it.
+  int channels = 0, alpha = -1, bits = 8;
+  std::vector<std::string> names;
+  if (ns == 1 && !sources[0].image.empty()) {
+    const Image& t = sources[0].image;
+    if (t.channels < 1 || t.channels > 16)
+      throw InputError("", "cannot transfer a texture of " + std::to_string(t.channels) + " channels");
+    channels = t.channels;
+    alpha = t.alpha_channel();
+    names = t.channel_names;
+    bits = t.bits;
+  } else {
+    bool colour = false, any_alpha = false;
+    for (const TextureSource& src : sources) {
+      const Image& t = src.image;
+      if (t.empty()) {
+        colour = colour || !(src.colour.x == src.colour.y && src.colour.y == src.colour.z);
+        continue;
+      }
+      const int a = t.alpha_channel();
+      const int colours = t.channels - (a >= 0 ? 1 : 0);
+      if (t.channels > 4 || (colours != 1 && colours != 3) || (a >= 0 && a != t.channels - 1))
+        throw InputError("", "cannot combine a texture of " + std::to_string(t.channels) +
+                                 " channels with others (grey or RGB, with or without alpha, can be)");
+      colour = colour || colours == 3;
+      any_alpha = any_alpha || a >= 0;
+      bits = std::max(bits, t.bits);
+    }
+    channels = (colour ? 3 : 1) + (any_alpha ? 1 : 0);
+    alpha = any_alpha ? channels - 1 : -1;
+  }
   // Straight alpha: a transparent texel's stored colour (often black) would bleed into its
   // neighbours' under bilinear filtering, so colours are filtered premultiplied.
   auto scale_colours = [&](Image& img, bool divide) {
@@ -197,15 +255,48 @@ Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& tar
       }
     }
   };
-  scale_colours(s.texture, false);
+  // Each source as a mapped signal in the result's channels, premultiplied.
+  std::vector<Signal> signals(ns);
+  std::vector<std::vector<double>> constant(ns);
+  for (int i = 0; i < ns; ++i) {
+    const TextureSource& src = sources[i];
+    Signal& sig = signals[i];
+    sig.dimension = channels;
+    if (src.image.empty()) {
+      const double grey = (src.colour.x + src.colour.y + src.colour.z) / 3;
+      constant[i] = channels < 3 ? std::vector<double>{grey}
+                                 : std::vector<double>{src.colour.x, src.colour.y, src.colour.z};
+      if (alpha >= 0) constant[i].push_back(1.0);
+      continue;
+    }
+    const Image& t = src.image;
+    if (t.channels == channels) {
+      sig.texture = t;
+    } else {
+      const int a = t.alpha_channel(), colours = t.channels - (a >= 0 ? 1 : 0);
+      sig.texture = Image(t.width, t.height, channels, 1.0f);
+      for (std::size_t p = 0, n = static_cast<std::size_t>(t.width) * t.height; p < n; ++p) {
+        const float* in = &t.pixels[p * t.channels];
+        float* out = &sig.texture.pixels[p * channels];
+        const int out_colours = channels - (alpha >= 0 ? 1 : 0);
+        for (int c = 0; c < out_colours; ++c) out[c] = colours == 3 ? in[c] : in[0];
+        if (alpha >= 0 && a >= 0) out[alpha] = in[a];
+      }
+    }
+    sig.set_texture_coordinates(source.uvs, source.face_uvs, src.wrap);
+    scale_colours(sig.texture, false);
+    sig.face_lod.assign(nf, 0.0f);
+  }
   // A face that reads many source texels for each sample taken (a 4096² texture carried to
   // 1024², or parts a layout squeezed) would alias: it reads a reduced copy of the texture
   // instead, chosen per face by the longer axis of its map from sample texels to source texels
   // (as a GPU's mipmapping does; the blur goes along the shorter axis too).
   const double sw = double(width) * supersample, sh = double(height) * supersample;
-  s.face_lod.assign(nf, 0.0f);
-  double deepest = 0;
+  std::vector<double> deepest(ns, 0.0);
   for (int f = 0; f < nf; ++f) {
+    const int i = face_source[f];
+    const Image& texture = signals[i].texture;
+    if (texture.empty()) continue;
     const Face &a = source.face_uvs[f], &b = target.face_uvs[f];
     auto src = [&](int k) {
       return Vec2d{source.uvs[a[k]].x * texture.width, source.uvs[a[k]].y * texture.height};
@@ -220,20 +311,31 @@ Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& tar
     const double e = j00 * j00 + j01 * j01 + j10 * j10 + j11 * j11, d = j00 * j11 - j01 * j10;
     const double sigma = std::sqrt(0.5 * (e + std::sqrt(std::max(e * e - 4 * d * d, 0.0))));
     if (sigma > 1 && std::isfinite(sigma)) {
-      s.face_lod[f] = static_cast<float>(std::log2(sigma));
-      deepest = std::max(deepest, static_cast<double>(s.face_lod[f]));
+      signals[i].face_lod[f] = static_cast<float>(std::log2(sigma));
+      deepest[i] = std::max(deepest[i], static_cast<double>(signals[i].face_lod[f]));
     }
   }
-  for (int l = 0; l < static_cast<int>(std::ceil(deepest)); ++l) {
-    const Image& from = l == 0 ? s.texture : s.mips.back();
-    if (from.width == 1 && from.height == 1) break;
-    s.mips.push_back(
-        resize_area(from, std::max(1, (from.width + 1) / 2), std::max(1, (from.height + 1) / 2)));
+  for (int i = 0; i < ns; ++i) {
+    Signal& sig = signals[i];
+    if (sig.texture.empty()) continue;
+    for (int l = 0; l < static_cast<int>(std::ceil(deepest[i])); ++l) {
+      const Image& from = l == 0 ? sig.texture : sig.mips.back();
+      if (from.width == 1 && from.height == 1) break;
+      sig.mips.push_back(
+          resize_area(from, std::max(1, (from.width + 1) / 2), std::max(1, (from.height + 1) / 2)));
+    }
   }
-  const Image fine = bake_signal(target, s, width * supersample, height * supersample);
+  const Image fine = bake_faces(target, channels, width * supersample, height * supersample,
+                                [&](int f, double b1, double b2, double* out) {
+                                  const int i = face_source[f];
+                                  if (signals[i].texture.empty())
+                                    std::copy(constant[i].begin(), constant[i].end(), out);
+                                  else
+                                    signals[i].evaluate(target, f, b1, b2, out);
+                                });
   Image out(width, height, channels);
-  out.channel_names = texture.channel_names;
-  out.bits = texture.bits;  // a 16-bit or float texture is not rounded to 8 bits on the way
+  out.channel_names = names;
+  out.bits = bits;  // a 16-bit or float texture is not rounded to 8 bits on the way
   const float weight = 1.0f / static_cast<float>(supersample * supersample);
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x)

@@ -464,6 +464,8 @@ RawMesh to_raw_mesh(const Mesh& mesh, const std::string& source) {
     for (const Face& f : mesh.face_uvs) raw.polygon_uvs.push_back({f[0], f[1], f[2]});
   }
   raw.polygon_groups = mesh.face_groups;
+  raw.polygon_materials = mesh.face_materials;
+  raw.material_names = mesh.material_names;
   return raw;
 }
 
@@ -498,6 +500,10 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
          " faces");
   if (has_groups && raw.polygon_groups.size() != raw.polygons.size())
     fail("groups for " + std::to_string(raw.polygon_groups.size()) + " of " + std::to_string(np) + " faces");
+  const bool has_materials = !raw.polygon_materials.empty();
+  if (has_materials && raw.polygon_materials.size() != raw.polygons.size())
+    fail("materials for " + std::to_string(raw.polygon_materials.size()) + " of " + std::to_string(np) +
+         " faces");
   for (int v = 0; v < nv; ++v) {
     if (!is_finite(raw.positions[v]))
       fail("vertex " + std::to_string(v) + " has a non-finite coordinate " + text(raw.positions[v]));
@@ -924,6 +930,11 @@ Mesh validate_mesh(const RawMesh& raw, bool repair, ValidationReport& report) {
   if (has_groups) {
     m.face_groups.resize(nf);
     for (int f = 0; f < nf; ++f) m.face_groups[f] = raw.polygon_groups[face_source[f]];
+  }
+  if (has_materials) {
+    m.face_materials.resize(nf);
+    for (int f = 0; f < nf; ++f) m.face_materials[f] = raw.polygon_materials[face_source[f]];
+    m.material_names = raw.material_names;
   }
   {
     UnionFind uf(nf);

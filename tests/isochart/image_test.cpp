@@ -359,6 +359,28 @@ TEST_CASE("read_image errors name the file", "[image]") {
   }
 }
 
+TEST_CASE("bilinear lookup far outside the image reads its period or border, never NaN", "[image]") {
+  // A material scaling its coordinates by 1e300 overflowed u · width and drew black (NaN).
+  Image img(2, 2, 1);
+  img.at(0, 0, 0) = 0.0f;
+  img.at(1, 0, 0) = 1.0f;
+  img.at(0, 1, 0) = 2.0f;
+  img.at(1, 1, 0) = 3.0f;
+  float far = -1, near = -1;
+  for (const Wrap w : {Wrap::Clamp, Wrap::Repeat, Wrap::Mirror}) {
+    for (const double u : {1e300, -1e300, 1.7e308, 3e7}) {
+      sample_bilinear(img, u, 0.25, &far, w, w);
+      CHECK(std::isfinite(far));
+    }
+  }
+  sample_bilinear(img, 1e300, 0.25, &far, Wrap::Clamp, Wrap::Clamp);
+  sample_bilinear(img, 2.0, 0.25, &near, Wrap::Clamp, Wrap::Clamp);
+  CHECK(far == near);  // the right border
+  sample_bilinear(img, 1e300 + 0.25, 0.25, &far, Wrap::Repeat, Wrap::Repeat);
+  sample_bilinear(img, 0.0, 0.25, &near, Wrap::Repeat, Wrap::Repeat);
+  CHECK(far == near);  // 1e300 is a whole number of periods (its fraction is below precision)
+}
+
 TEST_CASE("bilinear lookup", "[image]") {
   // 2×2 grey image; rows top first, so v = 1 is the top row.
   Image img(2, 2, 1);

@@ -847,6 +847,9 @@ TEST_CASE("OBJ: map_Kd names with spaces, options, quotes and backslashes; sever
   CHECK(texture_of("map_Kd tex dir/my tex.png") == want);  // as Blender writes it
   CHECK(texture_of("map_Kd -s 1 1 1 -clamp on tex dir/my tex.png") == want);
   CHECK(texture_of("map_Kd -bm 0.5 -s 2 2 \"tex dir/my tex.png\"") == want);
+  d.write("tex dir/2.png", "");
+  CHECK(texture_of("map_Kd -s tex dir/2.png").find("tex dir/2.png") !=
+        std::string::npos);                                 // -s without values
   CHECK(texture_of("map_Kd tex dir\\my tex.png") == want);  // written on Windows
   // The options that move the image or stop its tiling are kept, the file name still found.
   d.write("m.mtl", "newmtl a\nmap_Kd -clamp on -s 2 3 1 -o 0.5 -0.25 0 -bm 1 tex dir/my tex.png\n");

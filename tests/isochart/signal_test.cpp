@@ -979,8 +979,8 @@ TEST_CASE("isocharts atlas --bake-texture carries the input's texture onto the a
   CHECK(run("atlas " + dir + "/in.obj -o " + dir + "/plain.obj --width 256 --height 256") == 0);
   CHECK(read_text(dir + "/err.txt").find("--bake-texture FILE resamples it onto the atlas") !=
         std::string::npos);
-  // Faces of a second material would read the first one's texture: refused, unless --texture
-  // says which image every face reads.
+  // Faces of a second material read their own; one defined in no library is named, unless
+  // --texture says which image every face reads.
   {
     std::string obj = read_text(dir + "/in.obj");
     const auto face = obj.find("\nf ", obj.find("\nf ") + 1);
@@ -989,7 +989,8 @@ TEST_CASE("isocharts atlas --bake-texture carries the input's texture onto the a
     std::ofstream(dir + "/multi.obj") << obj;
   }
   CHECK(run("-q atlas " + dir + "/multi.obj -o " + dir + "/m.obj --bake-texture " + dir + "/m.png") == 2);
-  CHECK(read_text(dir + "/err.txt").find("uses several materials") != std::string::npos);
+  CHECK(read_text(dir + "/err.txt").find("its material other is defined in no material library it names") !=
+        std::string::npos);
   CHECK(run("-q atlas " + dir + "/multi.obj -o " + dir + "/m.obj --bake-texture " + dir +
             "/m.png --texture " + dir + "/tex.png") == 0);
   // Refused before any work: an OBJ material naming a path with spaces (readers split there), a
@@ -1029,4 +1030,93 @@ TEST_CASE("isocharts atlas --bake-texture carries the input's texture onto the a
   CHECK(run("-q atlas " + dir + "/in.obj -o " + dir + "/f.obj --texture " + dir + "/tex.png") == 2);
   CHECK_FALSE(std::filesystem::exists(dir + "/f.obj"));
   std::filesystem::remove_all(tmp);
+}
+
+TEST_CASE("isocharts atlas --bake-texture carries each material's texture, or its colour, over", "[signal]") {
+  // A model of three materials, as exporters write characters (body, clothes, plain parts):
+  // the atlas's one texture shows every face what its own material showed.
+  const std::filesystem::path tmp =
+      std::filesystem::temp_directory_path() / ("isocharts_materials_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(tmp);
+  const std::string dir = tmp.string();
+  Mesh m = plane(24);
+  for (auto& p : m.positions) p.z = 0.3 * std::sin(3 * p.x) * std::cos(2 * p.y);
+  const Image smooth = smooth_texture(128);
+  Image green(32, 32, 3, 0.0f);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) green.at(x, y, 1) = 0.5f + 0.4f * (x / 31.0f);
+  write_image(dir + "/a.png", smooth);
+  write_image(dir + "/b.png", green);
+  {
+    std::ofstream mtl(dir + "/in.mtl");
+    mtl << "newmtl a\nKd 1 1 1\nmap_Kd a.png\nnewmtl b\nmap_Kd -s 2 1 1 b.png\nnewmtl c\nKd 0.1 0.2 0.9\n";
+    std::ofstream obj(dir + "/in.obj");
+    obj << "mtllib in.mtl\n";
+    for (const auto& p : m.positions) obj << "v " << p.x << ' ' << p.y << ' ' << p.z << '\n';
+    for (const auto& uv : m.uvs) obj << "vt " << uv.x << ' ' << uv.y << '\n';
+    std::string last;
+    for (int f = 0; f < m.num_faces(); ++f) {
+      const double x = m.positions[m.faces[f][0]].x;
+      const std::string mat = x < 0.3 ? "a" : (x < 0.6 ? "b" : "c");
+      if (mat != last) obj << "usemtl " << mat << '\n';
+      last = mat;
+      obj << 'f';
+      for (int k = 0; k < 3; ++k) obj << ' ' << m.faces[f][k] + 1 << '/' << m.faces[f][k] + 1;
+      obj << '\n';
+    }
+  }
+  const std::string cli = "\"" + std::string(ISOCHARTS_CLI) + "\" ";
+  auto run = [&](const std::string& args) {
+    const int code = std::system((cli + args + " > " + dir + "/out.txt 2> " + dir + "/err.txt").c_str());
+    return WEXITSTATUS(code);
+  };
+  const LoadResult in = load_mesh(dir + "/in.obj");
+  REQUIRE(in.mesh.face_materials.size() == in.mesh.faces.size());
+  CHECK(in.mesh.material_names == std::vector<std::string>{"a", "b", "c"});
+  const std::vector<MeshTexture> textures = find_material_textures(dir + "/in.obj", in.mesh);
+  REQUIRE(textures.size() == 3);
+  CHECK(textures[0].file == dir + "/a.png");
+  CHECK(textures[1].uv_transform.a == 2);
+  CHECK((textures[2].file.empty() && textures[2].colour.z == Approx(0.9)));
+  REQUIRE(run("-q atlas " + dir + "/in.obj -o " + dir + "/out.obj --width 256 --height 256 --bake-texture " +
+              dir + "/baked.png") == 0);
+  const Image baked = read_image(dir + "/baked.png");
+  const Mesh out = load_mesh(dir + "/out.obj").mesh;
+  REQUIRE(out.num_faces() == in.mesh.num_faces());
+  double diff[3] = {0, 0, 0};
+  int count[3] = {0, 0, 0};
+  for (int f = 0; f < out.num_faces(); ++f) {
+    auto centre = [&](const Mesh& mesh) {
+      const Face& t = mesh.face_uvs[f];
+      return (mesh.uvs[t[0]] + mesh.uvs[t[1]] + mesh.uvs[t[2]]) / 3.0;
+    };
+    const int mat = in.mesh.face_materials[f];
+    const Vec2d p = centre(in.mesh), q = centre(out);
+    float want[3], got[3];
+    if (mat == 0) sample_bilinear(smooth, p.x, p.y, want);
+    if (mat == 1) sample_bilinear(green, 2 * p.x, p.y, want, Wrap::Repeat);
+    if (mat == 2) want[0] = 0.1f, want[1] = 0.2f, want[2] = 0.9f;
+    sample_bilinear(baked, q.x, q.y, got);
+    for (int c = 0; c < 3; ++c) diff[mat] += std::abs(want[c] - got[c]) / 3;
+    ++count[mat];
+  }
+  for (int i = 0; i < 3; ++i) {
+    INFO("material " << i);
+    REQUIRE(count[i] > 50);
+    CHECK(diff[i] / count[i] < 0.03);
+  }
+  CHECK(read_text(dir + "/err.txt").empty());  // -q
+  REQUIRE(run("atlas " + dir + "/in.obj -o " + dir + "/out.obj --width 256 --height 256 --bake-texture " +
+              dir + "/baked.png") == 0);
+  CHECK(read_text(dir + "/err.txt")
+            .find("faces read no texture in its material; baked in the material's colour") !=
+        std::string::npos);
+  // A material whose image is missing is named; baking over a material's image is refused.
+  std::filesystem::rename(dir + "/b.png", dir + "/b_gone.png");
+  CHECK(run("-q atlas " + dir + "/in.obj -o " + dir + "/out.obj --bake-texture " + dir + "/baked.png") == 2);
+  CHECK(read_text(dir + "/err.txt").find("b.png") != std::string::npos);
+  std::filesystem::rename(dir + "/b_gone.png", dir + "/b.png");
+  CHECK(run("-q atlas " + dir + "/in.obj -o " + dir + "/out.obj --bake-texture " + dir + "/b.png") == 2);
+  CHECK(read_image(dir + "/b.png").width == 32);  // untouched
+  if (!std::getenv("KEEP_MATERIALS_TEST")) std::filesystem::remove_all(tmp);
 }

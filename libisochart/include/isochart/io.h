@@ -83,10 +83,18 @@ struct MeshTexture {
     Vec2d apply(const Vec2d& uv) const { return {a * uv.x + b * uv.y + c, d * uv.x + e * uv.y + f}; }
   };
   UvTransform uv_transform;
+  /// The material's diffuse colour (OBJ `Kd`, glTF baseColorFactor's RGB): what its faces
+  /// show where it has no texture.
+  Vec3d colour{1, 1, 1};
 };
 /// \throw InputError when the mesh file itself cannot be read; a texture named but missing is
 ///        returned by name (reading it then fails).
 MeshTexture find_mesh_texture(const std::string& path);
+/// Every material's texture, entry i for material id i of mesh.face_materials (the mesh as
+/// loaded from `path`): by `usemtl` name for an OBJ, by material index for a glTF/glb. Empty
+/// when the mesh has no per-face materials.
+/// \throw InputError when the mesh file itself cannot be read.
+std::vector<MeshTexture> find_material_textures(const std::string& path, const Mesh& mesh);
 
 /// Reads a file into a raw polygon soup without validation (what the file says: glTF
 /// vertices split at UV and normal seams stay split; load_mesh joins those at equal positions).

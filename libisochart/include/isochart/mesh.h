@@ -23,6 +23,11 @@ struct Mesh {
   std::vector<Vec2d> uvs;       ///< texture coordinates referenced by face_uvs
   std::vector<Face> face_uvs;   ///< #F indices into `uvs`, or empty when the mesh has no UVs
   std::vector<int> face_groups; ///< #F group id per face (OBJ `g`/`o`, glTF primitive), or empty
+  /// #F material per face, or empty: an OBJ's `usemtl` names numbered in order of first use,
+  /// a glTF's material index; -1 for a face without one. find_material_textures numbers alike.
+  std::vector<int> face_materials;
+  /// OBJ: the `usemtl` name of each material id of face_materials; empty for other formats.
+  std::vector<std::string> material_names;
 
   int num_vertices() const { return static_cast<int>(positions.size()); }
   int num_faces() const { return static_cast<int>(faces.size()); }

@@ -114,6 +114,23 @@ Image bake_signal(const Mesh& mesh, const Signal& signal, int width, int height)
 Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& target, int width, int height,
                        int supersample = 2, const TextureWrap& wrap = {});
 
+/// One material's part in transfer_textures: its image, or, when that is empty, its colour.
+struct TextureSource {
+  Image image;
+  TextureWrap wrap;
+  Vec3d colour{1, 1, 1};
+};
+
+/// transfer_texture for faces reading different images (several materials): face f reads
+/// sources[face_source[f]] through the source mesh's texture coordinates. One image keeps its
+/// own channels; several meet in grey or RGB (colour when any is), with alpha when any has it
+/// (opaque where a source has none), and the deepest bits.
+/// \throw InputError as transfer_texture, and when a face names no source or an image has
+///        other channels than grey or RGB with or without alpha among several.
+Image transfer_textures(const Mesh& source, const std::vector<TextureSource>& sources,
+                        const std::vector<int>& face_source, const Mesh& target, int width, int height,
+                        int supersample = 2);
+
 struct SaeResult {
   /// Signal approximation error: sqrt(∫_S |f − f̃|² dA / ∫_S dA), f the signal, f̃ its
   /// bilinear reconstruction from the baked texture, |·| the Euclidean norm over channels.

@@ -18,6 +18,8 @@ struct RawMesh {
   std::vector<Vec2d> uvs;
   std::vector<std::vector<int>> polygon_uvs;  ///< per polygon, same size as polygons[i], or empty
   std::vector<int> polygon_groups;            ///< per polygon group id, or empty
+  std::vector<int> polygon_materials;         ///< per polygon material (Mesh::face_materials), or empty
+  std::vector<std::string> material_names;    ///< Mesh::material_names
   std::vector<std::string> warnings;          ///< reader notes (ignored elements, dropped attributes)
   long long faces_without_uvs = 0;            ///< faces an OBJ gave no vt, given (0, 0) by the reader
 };
