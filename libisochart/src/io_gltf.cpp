@@ -269,6 +269,10 @@ class GltfReader {
       };
       const std::array<int, 4> ids = {attr("POSITION"), attr("NORMAL"), attr("TEXCOORD_0"), attr("COLOR_0")};
       if (ids[0] < 0) fail(what + " has no POSITION attribute");
+      if (p.material < -1 || p.material >= static_cast<int>(model_.materials.size()))
+        fail(what + " names material " + std::to_string(p.material) + ", and the file has " +
+             std::to_string(model_.materials.size()) +
+             (model_.materials.size() == 1 ? " material" : " materials"));
       // Lightmap UVs come as TEXCOORD_1; read silently as "no texture coordinates" they hid
       // why an atlas was missing.
       if (ids[2] < 0 && attr("TEXCOORD_1") >= 0) ++second_uvs_only_;
@@ -919,12 +923,24 @@ MeshTexture material_texture(const std::string& path, const tinygltf::Model& mod
   // MIRRORED_REPEAT.
   const int sampler = model.textures[tex].sampler;
   if (sampler >= 0 && sampler < static_cast<int>(model.samplers.size())) {
+    const tinygltf::Sampler& sm = model.samplers[sampler];
+    for (const auto& [axis, mode] : {std::pair<const char*, int>{"wrapS", sm.wrapS}, {"wrapT", sm.wrapT}})
+      if (mode != TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE && mode != TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT &&
+          mode != TINYGLTF_TEXTURE_WRAP_REPEAT) {
+        t.problem = "its base-colour texture's sampler has " + std::string(axis) + " " +
+                    std::to_string(mode) + ", not a glTF wrap mode (33071, 33648 or 10497)";
+        return t;
+      }
     auto wrap = [](int mode) {
       if (mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE) return Wrap::Clamp;
       if (mode == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT) return Wrap::Mirror;
       return Wrap::Repeat;
     };
-    t.wrap = {wrap(model.samplers[sampler].wrapS), wrap(model.samplers[sampler].wrapT)};
+    t.wrap = {wrap(sm.wrapS), wrap(sm.wrapT)};
+  } else if (sampler != -1) {
+    t.problem = "its base-colour texture's sampler " + std::to_string(sampler) + " is out of range (" +
+                std::to_string(model.samplers.size()) + " samplers)";
+    return t;
   }
   const int source = model.textures[tex].source;
   if (source < 0 || source >= static_cast<int>(model.images.size())) {
@@ -943,6 +959,11 @@ MeshTexture material_texture(const std::string& path, const tinygltf::Model& mod
       } else {
         name += uri[i];
       }
+    }
+    if (std::any_of(name.begin(), name.end(),
+                    [](char ch) { return static_cast<unsigned char>(ch) < 0x20; })) {
+      t.problem = "its base-colour image URI holds a control character, so it names no file";
+      return t;
     }
     const auto slash = path.find_last_of('/');
     t.file = name.front() == '/' || slash == std::string::npos ? name : path.substr(0, slash + 1) + name;

@@ -411,6 +411,7 @@ struct MapStatement {
   bool clamp = false;  // -clamp on
   Vec2d scale{1, 1};   // -s u v
   Vec2d offset{0, 0};  // -o u v
+  std::string problem;  // an option value no number can hold, or empty
 };
 
 MapStatement map_statement(std::string_view rest) {
@@ -451,7 +452,10 @@ MapStatement map_statement(std::string_view rest) {
         // strtod of a word the number test passed; a malformed one ("1e") reads as its prefix.
         const double x = std::strtod(std::string(value).c_str(), nullptr);
         Vec2d& target = word == "-s" ? m.scale : m.offset;
-        if (std::isfinite(x)) (i == 0 ? target.x : target.y) = x;
+        if (std::isfinite(x))
+          (i == 0 ? target.x : target.y) = x;
+        else if (m.problem.empty())
+          m.problem = std::string(word) + " value " + std::string(value) + " is beyond any number";
       }
     }
   }
@@ -560,10 +564,16 @@ MeshTexture material_texture(const std::vector<std::string>& libraries, const st
           r = stop == std::string_view::npos ? std::string_view() : r.substr(stop);
         }
         if (n == 3) t.colour = {c[0], c[1], c[2]};
-      } else if (in_material && t.file.empty() && after_keyword(line, "map_Kd", rest)) {
+      } else if (in_material && t.file.empty() &&
+                 (after_keyword(line, "map_Kd", rest) || after_keyword(line, "map_kd", rest))) {
+        // map_kd: as some exporters write it, and other readers take it.
         const MapStatement map = map_statement(rest);
         if (map.file.empty()) continue;
         t.file = material_file(directory_of(mtl_path), map.file);
+        if (!map.problem.empty()) {
+          t.problem = "its material's map_Kd " + map.problem;
+          t.file.clear();  // not read at all rather than read elsewhere than the map says
+        }
         if (map.clamp) t.wrap = {Wrap::Clamp, Wrap::Clamp};
         // As Blender and three.js read them: uv · scale + offset.
         t.uv_transform.a = map.scale.x;

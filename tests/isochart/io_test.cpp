@@ -790,6 +790,26 @@ TEST_CASE("glTF and OBJ: a texture named but unusable is said, by file or by rea
   t = find_mesh_texture(d.write("sampler.gltf", doc.dump()));
   CHECK(t.problem.empty());
   CHECK((t.wrap.u == Wrap::Clamp && t.wrap.v == Wrap::Mirror));
+  // A wrap glTF does not define, or a sampler that is not there, was read as repeating.
+  doc["samplers"] = {{{"wrapS", 12345}}};
+  CHECK(find_mesh_texture(d.write("badwrap.gltf", doc.dump())).problem ==
+        "its base-colour texture's sampler has wrapS 12345, not a glTF wrap mode (33071, 33648 or 10497)");
+  doc["samplers"] = {{{"wrapS", 10497}}};
+  doc["textures"] = {{{"source", 0}, {"sampler", 3}}};
+  CHECK(find_mesh_texture(d.write("nosuchsampler.gltf", doc.dump())).problem ==
+        "its base-colour texture's sampler 3 is out of range (1 samplers)");
+  doc["textures"] = {{{"source", 0}, {"sampler", 0}}};
+  // A URI decoding to a control character (%00) names no file; it reached error messages raw.
+  doc["images"] = {{{"uri", "a%00b.png"}}};
+  t = find_mesh_texture(d.write("nul.gltf", doc.dump()));
+  CHECK(t.file.empty());
+  CHECK(t.problem == "its base-colour image URI holds a control character, so it names no file");
+  doc["images"] = {{{"uri", "tex.png"}}};
+  // A primitive naming a material the file does not have is refused, not drawn without one.
+  nlohmann::json missing = doc;
+  missing["meshes"][0]["primitives"][0]["material"] = 4;
+  CHECK(load_error(d.write("nomaterial.gltf", missing.dump())) ==
+        "mesh 0 primitive 0 names material 4, and the file has 1 material");
   // An OBJ whose material library is missing.
   t = find_mesh_texture(d.write("m.obj", "mtllib gone.mtl\nusemtl a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"));
   CHECK(t.file.empty());
@@ -863,6 +883,12 @@ TEST_CASE("OBJ: map_Kd names with spaces, options, quotes and backslashes; sever
   t = find_mesh_texture(d.file("m.obj"));
   CHECK((t.wrap.u == Wrap::Repeat && t.wrap.v == Wrap::Repeat));
   CHECK(t.uv_transform.identity());
+  // map_kd as some exporters write it; a map too large for any number is said, not ignored.
+  CHECK(texture_of("map_kd tex dir/my tex.png") == want);
+  d.write("m.mtl", "newmtl a\nmap_Kd -s 1e400 1 1 tex dir/my tex.png\n");
+  t = find_mesh_texture(d.file("m.obj"));
+  CHECK(t.file.empty());
+  CHECK(t.problem == "its material's map_Kd -s value 1e400 is beyond any number");
   // `mtllib` takes a list: the first library without the material is passed over.
   d.write("other.mtl", "newmtl b\nmap_Kd nothing.png\n");
   d.write("m.mtl", "newmtl a\nmap_Kd tex dir/my tex.png\n");
