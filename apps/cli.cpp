@@ -409,6 +409,52 @@ void check_material_coordinates(const std::string& file, const isochart::Mesh& m
                                  "texture coordinates beyond any number");
 }
 
+MaterialImages read_material_images(const std::string& file, const isochart::Mesh& mesh,
+                                    const std::string& beside) {
+  const std::vector<isochart::MeshTexture> textures = isochart::find_material_textures(file, mesh);
+  MaterialImages c;
+  const int nf = mesh.num_faces();
+  const int nt = static_cast<int>(textures.size());
+  const auto known = [&](int m) { return m >= 0 && m < nt; };
+  std::vector<int> source_of(textures.size(), -1);
+  int plain = -1;  // faces of no material, or of one no file defines: white, as viewers show them
+  c.face_source.resize(nf);
+  for (int f = 0; f < nf; ++f) {
+    const int m = f < static_cast<int>(mesh.face_materials.size()) ? mesh.face_materials[f] : -1;
+    int& slot = known(m) ? source_of[m] : plain;
+    if (slot < 0) {
+      slot = static_cast<int>(c.sources.size());
+      c.sources.emplace_back();
+      if (known(m)) {
+        const isochart::MeshTexture& t = textures[m];
+        const std::string label = m < static_cast<int>(mesh.material_names.size())
+                                      ? "material " + mesh.material_names[m]
+                                      : "material " + std::to_string(m);
+        if (!t.problem.empty()) throw isochart::InputError(file, t.problem + " (" + label + ")");
+        c.sources.back().image = read_mesh_texture(t, beside, file);
+        c.sources.back().wrap = t.wrap;
+        c.sources.back().colour = t.colour;
+        if (!t.file.empty()) c.files.push_back(t.file);
+      }
+    }
+    if (c.sources[slot].image.empty()) ++c.untextured_faces;
+    c.face_source[f] = slot;
+  }
+  c.source = mesh;
+  c.source.uvs.clear();
+  c.source.uvs.reserve(3 * static_cast<std::size_t>(nf));
+  for (int f = 0; f < nf; ++f) {
+    const int m = f < static_cast<int>(mesh.face_materials.size()) ? mesh.face_materials[f] : -1;
+    for (int k = 0; k < 3; ++k) {
+      const isochart::Vec2d uv = mesh.uvs[mesh.face_uvs[f][k]];
+      c.source.uvs.push_back(known(m) ? textures[m].uv_transform.apply(uv) : uv);
+      c.source.face_uvs[f][k] = 3 * f + k;
+    }
+  }
+  check_material_coordinates(file, c.source);
+  return c;
+}
+
 isochart::Mesh as_material_reads(const isochart::MeshTexture& t, const isochart::Mesh& mesh) {
   isochart::Mesh moved = mesh;
   if (t.uv_transform.identity()) return moved;

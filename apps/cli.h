@@ -253,6 +253,22 @@ isochart::Mesh as_material_reads(const isochart::MeshTexture& t, const isochart:
 ///        file's, moved by its materials' maps) is not finite: a map so large it overflows.
 void check_material_coordinates(const std::string& file, const isochart::Mesh& moved);
 
+/// A model's materials as its faces read them (several `usemtl` materials, glTF primitives'
+/// materials): each material's image read once, or its colour where it names none.
+struct MaterialImages {
+  std::vector<isochart::TextureSource> sources;
+  std::vector<int> face_source;    // per face, into sources
+  isochart::Mesh source;           // the mesh with the coordinates its materials read
+  long long untextured_faces = 0;  // faces reading a colour, no image
+  std::vector<std::string> files;  // the image files read
+};
+/// Reads every material of `mesh` (loaded from `file`): faces of no material, or of one no
+/// file defines, read white; coordinates moved per face by its material's map.
+/// \throw isochart::InputError naming `file` and the material when one cannot be used, or its
+///        image when that cannot be read (read_mesh_texture, embedded images through `beside`).
+MaterialImages read_material_images(const std::string& file, const isochart::Mesh& mesh,
+                                    const std::string& beside);
+
 /// Seconds since `t0`.
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -100,56 +100,20 @@ struct Carry {
 // The input's materials, each face reading its own (an OBJ's `usemtl`, a glTF primitive's
 // material): images read once each, coordinates moved per face by its material's map.
 Carry carry_materials(const Context& ctx, const AtlasArgs& a, const isochart::Mesh& mesh) {
-  const std::vector<isochart::MeshTexture> textures = isochart::find_material_textures(a.input, mesh);
-  Carry c;
-  const int nf = mesh.num_faces();
-  std::vector<int> source_of(textures.size(), -1);
-  int plain = -1;  // faces of no material, or of one no file defines: white, as viewers show them
-  long long untextured = 0;
-  std::vector<std::string> inputs;
-  c.face_source.resize(nf);
-  for (int f = 0; f < nf; ++f) {
-    const int m = mesh.face_materials[f];
-    int& slot = m >= 0 && m < static_cast<int>(textures.size()) ? source_of[m] : plain;
-    if (slot < 0) {
-      slot = static_cast<int>(c.sources.size());
-      c.sources.emplace_back();
-      if (&slot != &plain) {
-        const isochart::MeshTexture& t = textures[m];
-        const std::string label = m < static_cast<int>(mesh.material_names.size())
-                                      ? "material " + mesh.material_names[m]
-                                      : "material " + std::to_string(m);
-        if (!t.problem.empty()) throw isochart::InputError(a.input, t.problem + " (" + label + ")");
-        c.sources.back().image = read_mesh_texture(t, a.bake_texture, a.input);
-        c.sources.back().wrap = t.wrap;
-        c.sources.back().colour = t.colour;
-        if (!t.file.empty()) inputs.push_back(t.file);
-      }
-    }
-    if (c.sources[slot].image.empty()) ++untextured;
-    c.face_source[f] = slot;
-  }
+  MaterialImages m = read_material_images(a.input, mesh, a.bake_texture);
   // A material's texture belongs to the input model: baking over it would break the model.
-  ctx.check_paths(inputs, {a.bake_texture});
-  if (untextured == nf)
+  ctx.check_paths(m.files, {a.bake_texture});
+  const long long untextured = m.untextured_faces;
+  if (untextured == mesh.num_faces())
     throw isochart::InputError(
         a.input, "names no texture to carry over (--bake-texture); give one with --texture IMG");
   if (untextured > 0)
     ctx.warn(a.input, std::to_string(untextured) + (untextured == 1 ? " face reads" : " faces read") +
                           " no texture in its material; baked in the material's colour");
-  c.source = mesh;
-  c.source.uvs.clear();
-  c.source.uvs.reserve(3 * static_cast<std::size_t>(nf));
-  for (int f = 0; f < nf; ++f) {
-    const int m = mesh.face_materials[f];
-    const bool moved = m >= 0 && m < static_cast<int>(textures.size());
-    for (int k = 0; k < 3; ++k) {
-      const isochart::Vec2d uv = mesh.uvs[mesh.face_uvs[f][k]];
-      c.source.uvs.push_back(moved ? textures[m].uv_transform.apply(uv) : uv);
-      c.source.face_uvs[f][k] = 3 * f + k;
-    }
-  }
-  check_material_coordinates(a.input, c.source);
+  Carry c;
+  c.sources = std::move(m.sources);
+  c.face_source = std::move(m.face_source);
+  c.source = std::move(m.source);
   return c;
 }
 

@@ -126,6 +126,7 @@ void run_render(const Context& ctx, const RenderArgs& a) {
     mode = "uv-layout";
   }
   std::string own;  // the mesh's own texture drawn: its file, or "embedded"
+  MaterialImages materials;  // or its materials' images, each face its own
   if (!a.uv_layout) {
     isochart::RenderOptions o;
     o.views = a.views;
@@ -141,11 +142,23 @@ void run_render(const Context& ctx, const RenderArgs& a) {
       // What synth and atlas outputs carry (an OBJ's MTL map_Kd, a glb's base colour) was
       // drawn untextured unless named again with --texture.
       const isochart::MeshTexture t = isochart::find_mesh_texture(a.input);
-      if (!t.problem.empty()) ctx.warn(a.input, t.problem + "; drawn shaded");
-      if (t.several_materials)
-        ctx.warn(a.input, "uses several materials; every face is drawn with the first one's texture");
+      if (!t.problem.empty() && !t.several_materials) ctx.warn(a.input, t.problem + "; drawn shaded");
       try {
-        texture = read_mesh_texture(t, a.output, a.input);
+        if (t.several_materials && !mesh.face_materials.empty()) {
+          // Each face in its own material's image, or its colour where the material has none.
+          materials = read_material_images(a.input, mesh, a.output);
+          if (materials.untextured_faces == mesh.num_faces()) {
+            materials = {};
+          } else {
+            own = materials.files.empty() ? "embedded" : materials.files.front();
+            mesh = std::move(materials.source);
+            for (const isochart::TextureSource& m : materials.sources)
+              o.materials.push_back({m.image.empty() ? nullptr : &m.image, m.wrap, m.colour});
+            o.face_material = materials.face_source;
+          }
+        } else {
+          texture = read_mesh_texture(t, a.output, a.input);
+        }
         if (!texture.empty()) {
           own = t.file.empty() ? "embedded" : t.file;
           mesh = as_material_reads(t, mesh);
@@ -156,6 +169,9 @@ void run_render(const Context& ctx, const RenderArgs& a) {
         const std::string which = e.file().empty() || e.file() == a.input ? "" : " " + e.file();
         ctx.warn(a.input, "its texture" + which + " cannot be read (" + e.what() + "); drawn shaded");
         texture = isochart::Image{};
+        materials = {};
+        o.materials.clear();
+        o.face_material.clear();
         own.clear();
       }
     }
@@ -181,6 +197,12 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   j["output"] = a.output;
   j["mode"] = mode;
   if (mode == "textured") j["texture"] = own.empty() ? a.texture : own;
+  if (mode == "textured" && !materials.sources.empty()) {
+    nlohmann::json files = nlohmann::json::array();
+    for (const std::string& f : materials.files) files.push_back(f);
+    j["materials"] = materials.sources.size();
+    j["texture_files"] = files;
+  }
   j["views"] = a.uv_layout ? 0 : a.views;
   if (!a.uv_layout) j["up"] = a.up;
   j["width"] = image.width;

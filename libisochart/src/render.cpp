@@ -172,11 +172,18 @@ struct Shared {
   std::vector<Vec3d> face_normal;
   std::vector<Vec3d> corner_normal;
   std::vector<Vec3d> face_color;  // Shaded / Charts
-  TextureWrap texture_wrap;
-  int texture_alpha = -1;  // the texture's alpha channel, if it has one
-  // With alpha, the texture with its colours multiplied by alpha: filtered straight, the colour
-  // of transparent texels bled in as a fringe along alpha edges.
-  Image premultiplied;
+  // Textured: what each material's faces read (one material for RenderOptions::texture).
+  struct Material {
+    const Image* texture = nullptr;  // null: `colour`
+    TextureWrap wrap;
+    int alpha = -1;  // the texture's alpha channel, if it has one
+    // With alpha, the texture with its colours multiplied by alpha: filtered straight, the
+    // colour of transparent texels bled in as a fringe along alpha edges.
+    Image premultiplied;
+    Vec3d colour{1, 1, 1};
+  };
+  std::vector<Material> materials;
+  std::vector<int> face_material;  // empty: material 0
   Vec3d centre;
   double radius;
   std::vector<char> referenced;
@@ -261,9 +268,7 @@ void render_view(const Shared& s, int view, int x0, int tile_w, Image& out) {
   const Vec3d fill_light = normalized(cam.right * 0.6 + cam.up * 0.1 - cam.forward * 0.5);
   const double wire_half_width = 0.5 * ss;  // one output pixel in total, half from each side
   float texel[64];
-  const Image* tex = o.color != ColorMode::Textured ? nullptr
-                     : s.texture_alpha >= 0         ? &s.premultiplied
-                                                    : o.texture;
+  const bool textured = o.color == ColorMode::Textured;
   auto shade = [&](int x, int y, int f) {
     const Face& t = mesh.faces[f];
     const ScreenVertex &a = sv[t[0]], &b = sv[t[1]], &c = sv[t[2]];
@@ -287,17 +292,22 @@ void render_view(const Shared& s, int view, int x0, int tile_w, Image& out) {
     if (dot(n, to_eye) < 0) n = -n;
 
     Vec3d base;
-    if (tex) {
+    const Shared::Material* mat =
+        !textured ? nullptr : &s.materials[s.face_material.empty() ? 0 : s.face_material[f]];
+    if (mat && mat->texture) {
+      const Image& tex = mat->alpha >= 0 ? mat->premultiplied : *mat->texture;
       const auto& uv = mesh.face_uvs[f];
       const Vec2d q = mesh.uvs[uv[0]] * m[0] + mesh.uvs[uv[1]] * m[1] + mesh.uvs[uv[2]] * m[2];
-      sample_bilinear(*tex, q.x, q.y, texel, s.texture_wrap.u, s.texture_wrap.v);
-      base = tex->channels >= 3 ? Vec3d{texel[0], texel[1], texel[2]} : Vec3d{texel[0], texel[0], texel[0]};
+      sample_bilinear(tex, q.x, q.y, texel, mat->wrap.u, mat->wrap.v);
+      base = tex.channels >= 3 ? Vec3d{texel[0], texel[1], texel[2]} : Vec3d{texel[0], texel[0], texel[0]};
       // A texture with alpha (RGBA, or grey and alpha) lies over the plain grey surface, as in
       // a viewer's blend, instead of showing the colour of its transparent texels.
-      if (s.texture_alpha >= 0) {
-        const double alpha = std::clamp<double>(texel[s.texture_alpha], 0.0, 1.0);
+      if (mat->alpha >= 0) {
+        const double alpha = std::clamp<double>(texel[mat->alpha], 0.0, 1.0);
         base = base + kGrey * (1 - alpha);  // already multiplied by alpha
       }
+    } else if (mat) {
+      base = mat->colour;
     } else {
       base = s.face_color[f];
     }
@@ -496,27 +506,53 @@ Image render_mesh(const Mesh& input, const RenderOptions& options) {
       if (!mesh.has_uvs())
         throw InputError("", "textured rendering needs texture coordinates; the mesh has none");
       check_uvs(mesh);
-      if (!o.texture || o.texture->empty()) throw InputError("", "textured rendering needs a texture image");
-      if (o.texture->channels > 64) throw InputError("", "texture has too many channels");
+      if (o.materials.empty()) {
+        if (!o.texture || o.texture->empty())
+          throw InputError("", "textured rendering needs a texture image");
+        s.materials.push_back({o.texture, o.texture_wrap, -1, {}, {1, 1, 1}});
+      } else {
+        if (o.face_material.size() != mesh.faces.size())
+          throw InputError("", "face_material has " + std::to_string(o.face_material.size()) +
+                                   " entries for " + std::to_string(nf) + " faces");
+        for (const int m : o.face_material)
+          if (m < 0 || m >= static_cast<int>(o.materials.size()))
+            throw InputError("", "face material " + std::to_string(m) + " out of range (" +
+                                     std::to_string(o.materials.size()) + " materials)");
+        for (const RenderOptions::Material& m : o.materials)
+          s.materials.push_back(
+              {m.texture && !m.texture->empty() ? m.texture : nullptr, m.wrap, -1, {}, m.colour});
+        s.face_material = o.face_material;
+      }
       {
         // An atlas (all UVs in the unit square) must not bleed across the texture's borders;
         // an axis the coordinates leave is read as the material says (by default it repeats).
-        bool out_u = false, out_v = false;
-        for (const Vec2d& uv : mesh.uvs) {
-          out_u = out_u || uv.x < 0 || uv.x > 1;
-          out_v = out_v || uv.y < 0 || uv.y > 1;
+        const int nm = static_cast<int>(s.materials.size());
+        std::vector<char> out_u(nm, 0), out_v(nm, 0);
+        for (int f = 0; f < nf; ++f) {
+          const int m = s.face_material.empty() ? 0 : s.face_material[f];
+          for (const int t : mesh.face_uvs[f]) {
+            const Vec2d& uv = mesh.uvs[t];
+            out_u[m] = out_u[m] || uv.x < 0 || uv.x > 1;
+            out_v[m] = out_v[m] || uv.y < 0 || uv.y > 1;
+          }
         }
-        s.texture_wrap.u = out_u ? o.texture_wrap.u : Wrap::Clamp;
-        s.texture_wrap.v = out_v ? o.texture_wrap.v : Wrap::Clamp;
+        for (int m = 0; m < nm; ++m) {
+          Shared::Material& mat = s.materials[m];
+          if (!out_u[m]) mat.wrap.u = Wrap::Clamp;
+          if (!out_v[m]) mat.wrap.v = Wrap::Clamp;
+        }
       }
-      s.texture_alpha = o.texture->alpha_channel();
-      if (s.texture_alpha >= 0) {
-        s.premultiplied = *o.texture;
-        Image& pm = s.premultiplied;
+      for (Shared::Material& mat : s.materials) {
+        if (!mat.texture) continue;
+        if (mat.texture->channels > 64) throw InputError("", "texture has too many channels");
+        mat.alpha = mat.texture->alpha_channel();
+        if (mat.alpha < 0) continue;
+        mat.premultiplied = *mat.texture;
+        Image& pm = mat.premultiplied;
         for (std::size_t i = 0; i < pm.pixels.size(); i += pm.channels) {
-          const float alpha = std::clamp(pm.pixels[i + s.texture_alpha], 0.0f, 1.0f);
+          const float alpha = std::clamp(pm.pixels[i + mat.alpha], 0.0f, 1.0f);
           for (int c = 0; c < pm.channels; ++c)
-            if (c != s.texture_alpha) pm.pixels[i + c] *= alpha;
+            if (c != mat.alpha) pm.pixels[i + c] *= alpha;
         }
       }
       break;

@@ -245,6 +245,39 @@ TEST_CASE("a texture is wrapped per axis as the material asks", "[render]") {
   CHECK(mirrored.pixels != repeated.pixels);
 }
 
+TEST_CASE("faces of several materials read each its own texture or colour", "[render]") {
+  // The quad's lower-right triangle reads a red image, its upper-left one a material with no
+  // image but a blue colour: a multi-material model drawn whole, not in its first texture.
+  const Mesh quad = textured_quad();
+  Image red(8, 8, 3, 0.0f);
+  for (int y = 0; y < 8; ++y)
+    for (int x = 0; x < 8; ++x) red.at(x, y, 0) = 0.9f;
+  RenderOptions o;
+  o.width = o.height = 128;
+  o.perspective = false;
+  o.color = ColorMode::Textured;
+  o.materials = {{&red, {}, {1, 1, 1}}, {nullptr, {}, {0.1, 0.2, 0.9}}};
+  o.face_material = {0, 1};
+  const Image img = render_mesh(quad, o);
+  CHECK(chroma(img, 96, 96).x > 0.6);  // image y runs down: the lower-right triangle
+  CHECK(chroma(img, 32, 32).z > 0.6);
+  CHECK(chroma(img, 32, 32).x < 0.2);
+  // One material for both faces is the single-texture render.
+  o.materials = {{&red, {}, {1, 1, 1}}};
+  o.face_material = {0, 0};
+  const Image one = render_mesh(quad, o);
+  RenderOptions plain = o;
+  plain.materials.clear();
+  plain.face_material.clear();
+  plain.texture = &red;
+  CHECK(render_mesh(quad, plain).pixels == one.pixels);
+  // Materials that do not match the faces are refused.
+  o.face_material = {0};
+  CHECK_THROWS_AS(render_mesh(quad, o), InputError);
+  o.face_material = {0, 1};
+  CHECK_THROWS_WITH(render_mesh(quad, o), Catch::Contains("out of range"));
+}
+
 TEST_CASE("a transparent texture shows the plain surface beneath it", "[render]") {
   // Black texels with alpha 0 used to render black: the alpha channel was ignored.
   const Mesh quad = textured_quad();

@@ -1118,5 +1118,22 @@ TEST_CASE("isocharts atlas --bake-texture carries each material's texture, or it
   std::filesystem::rename(dir + "/b_gone.png", dir + "/b.png");
   CHECK(run("-q atlas " + dir + "/in.obj -o " + dir + "/out.obj --bake-texture " + dir + "/b.png") == 2);
   CHECK(read_image(dir + "/b.png").width == 32);  // untouched
+  // render draws every material: blue (material c) on the right of the plane, green (b, its
+  // image) in the middle, where the first material's texture alone had neither.
+  REQUIRE(run("--json render " + dir + "/in.obj -o " + dir +
+              "/r.png --views 1 --ortho --up z --width 240 "
+              "--height 240") == 0);
+  CHECK(read_text(dir + "/err.txt").find("first") == std::string::npos);
+  CHECK(read_text(dir + "/out.txt").find("\"materials\": 3") != std::string::npos);
+  const Image r = read_image(dir + "/r.png");
+  int bluish = 0, greenish = 0;
+  for (int y = 0; y < r.height; ++y)
+    for (int x = 0; x < r.width; ++x) {
+      const float cr = r.at(x, y, 0), cg = r.at(x, y, 1), cb = r.at(x, y, 2);
+      bluish += cb > 2 * cr && cb > 1.5f * cg;
+      greenish += cg > 2 * cr && cg > 2 * cb;
+    }
+  CHECK(bluish > 2000);
+  CHECK(greenish > 2000);
   if (!std::getenv("KEEP_MATERIALS_TEST")) std::filesystem::remove_all(tmp);
 }

@@ -31,6 +31,17 @@ struct RenderOptions {
   /// (the material's sampler); along the others it is clamped, so an atlas does not bleed
   /// across the texture's borders.
   TextureWrap texture_wrap;
+  /// A model of several materials (ColorMode::Textured): face f reads
+  /// materials[face_material[f]] instead of `texture`, each material with its own wrap (clamped
+  /// along an axis its faces' coordinates stay within [0, 1] along, as `texture`); a material
+  /// without a texture shows its colour.
+  struct Material {
+    const Image* texture = nullptr;  ///< not owned; null: `colour`
+    TextureWrap wrap;
+    Vec3d colour{1, 1, 1};
+  };
+  std::vector<Material> materials;
+  std::vector<int> face_material;  ///< #F indices into `materials`, with `materials`
   /// Per-face chart ids (#F, ≥ 0) for ColorMode::Charts; overrides face_groups and UVs.
   std::vector<int> face_charts;
   bool wireframe = false;    ///< overlay the triangle edges (1 px dark lines)
@@ -48,7 +59,8 @@ struct RenderOptions {
 /// otherwise.
 /// \throw InputError for invalid options (views, supersample, or a size beyond 16384 per side
 ///        or 2^25 samples = width × height × supersample²), an empty mesh, indices out of
-///        range, or a colour mode the mesh cannot provide (no charts, no UVs, no texture).
+///        range, or a colour mode the mesh cannot provide (no charts, no UVs, no texture), or
+///        materials with face_material of the wrong size or out of range.
 Image render_mesh(const Mesh& mesh, const RenderOptions& options = {});
 
 /// Draws the atlas in texture space into an RGB image of width × height pixels on white:
