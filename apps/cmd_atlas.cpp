@@ -226,7 +226,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   }
 
   isochart::LoadResult in = ctx.load(a.input);
-  const Carry carry = texture_to_carry(ctx, a, in, named_texture);
+  Carry carry = texture_to_carry(ctx, a, in, named_texture);
   const double load_seconds = seconds_since(t0);
   isochart::Signal signal;
   isochart::SignalAtlasStats sig_stats;
@@ -272,13 +272,16 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
   }
   double bake_seconds = 0;
   bool bake_transparent = false;  // the outputs' materials then blend the texture's alpha
-  if (!carry.empty()) {
+  const bool baking = !carry.empty();
+  if (baking) {
     const auto t_bake = std::chrono::steady_clock::now();
-    // At the packing size, 2×2 samples a texel up to 2048² (the bake then holds about 440 MB).
+    // At the packing size, 2×2 samples a texel up to 2048²; larger textures take one sample a
+    // texel, as four would quadruple the time (the memory does not grow: the bake runs in bands).
     const int w = a.options.pack.width, h = a.options.pack.height;
     const int supersample = static_cast<long long>(w) * h <= 2048LL * 2048 ? 2 : 1;
-    const isochart::Image baked = isochart::transfer_textures(carry.source, carry.sources, carry.face_source,
-                                                              out_mesh, w, h, supersample);
+    // The images are moved in (they are not needed after), so none is copied.
+    const isochart::Image baked = isochart::transfer_textures(carry.source, std::move(carry.sources),
+                                                              carry.face_source, out_mesh, w, h, supersample);
     const std::string ext = lower_extension(a.bake_texture);
     const int alpha = baked.alpha_channel();
     long long transparent = 0;
@@ -299,7 +302,7 @@ void run_atlas(const Context& ctx, AtlasArgs a) {
     isochart::SaveOptions so;
     so.texture_transparent = bake_transparent;
     if (a.keep_face_order) so.write_groups = isochart::ObjGroups::FaceOrder;
-    if (!carry.empty()) {
+    if (baking) {
       const isochart::MeshFormat f = isochart::format_from_path(out);
       // An OBJ's material names the image relative to the OBJ; glb embeds it; PLY has no materials.
       if (f == isochart::MeshFormat::Obj) {

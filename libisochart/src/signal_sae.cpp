@@ -1,6 +1,9 @@
 // Baking a signal into an atlas texture and the signal approximation error (Iso-charts §9.3;
 // Sander et al. 2002 §5).
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -69,44 +72,12 @@ void check_size(int w, int h) {
 
 namespace {
 
-// bake_signal's work for any signal: `evaluate(f, b1, b2, out)` writes `dim` values at
-// barycentric point (1 − b1 − b2, b1, b2) of face f.
-template <class Evaluate>
-Image bake_faces(const Mesh& mesh, int dim, int width, int height, const Evaluate& evaluate) {
-  Image img(width, height, dim, 0.0f);
+// The rest of the gutter: breadth-first dilation from the `filled` texels, each new texel the
+// mean of its filled 8-neighbours from earlier layers.
+void fill_gutter(Image& img, std::vector<char> filled) {
+  const int width = img.width, height = img.height, dim = img.channels;
   const size_t n = static_cast<size_t>(width) * height;
-  std::vector<double> dist(n, kInf);
-  // Texels near a chart take the signal at the nearest point of the nearest triangle, so a
-  // bilinear lookup anywhere inside the chart only mixes the chart's own signal.
-  constexpr double kReach = 1.5;
-  std::vector<double> value(dim);
-  for (int f = 0; f < mesh.num_faces(); ++f) {
-    Vec2d t[3];
-    for (int k = 0; k < 3; ++k) t[k] = to_texel(mesh.uvs[mesh.face_uvs[f][k]], width, height);
-    if (!is_finite(t[0]) || !is_finite(t[1]) || !is_finite(t[2])) continue;
-    const double lo_x = std::min({t[0].x, t[1].x, t[2].x}) - kReach,
-                 hi_x = std::max({t[0].x, t[1].x, t[2].x}) + kReach;
-    const double lo_y = std::min({t[0].y, t[1].y, t[2].y}) - kReach,
-                 hi_y = std::max({t[0].y, t[1].y, t[2].y}) + kReach;
-    const int x0 = std::max(0, static_cast<int>(std::floor(lo_x - 0.5)));
-    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(hi_x - 0.5)));
-    const int y0 = std::max(0, static_cast<int>(std::floor(lo_y - 0.5)));
-    const int y1 = std::min(height - 1, static_cast<int>(std::ceil(hi_y - 0.5)));
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        double b1 = 0, b2 = 0;
-        const double d = closest_point(t, {x + 0.5, y + 0.5}, b1, b2);
-        const size_t i = static_cast<size_t>(y) * width + x;
-        if (d > kReach || !(d < dist[i])) continue;
-        dist[i] = d;
-        evaluate(f, b1, b2, value.data());
-        for (int c = 0; c < dim; ++c) img.pixels[i * dim + c] = static_cast<float>(value[c]);
-      }
-  }
-  // The rest of the gutter: breadth-first dilation, each new texel the mean of its filled
-  // 8-neighbours from earlier layers.
-  std::vector<char> filled(n), queued(n, 0);
-  for (size_t i = 0; i < n; ++i) filled[i] = dist[i] < kInf;
+  std::vector<char> queued(n, 0);
   std::vector<int> layer;
   auto enqueue_neighbours = [&](size_t i) {
     const int x = static_cast<int>(i % width), y = static_cast<int>(i / width);
@@ -123,30 +94,88 @@ Image bake_faces(const Mesh& mesh, int dim, int width, int height, const Evaluat
   };
   for (size_t i = 0; i < n; ++i)
     if (filled[i]) enqueue_neighbours(i);
-  std::vector<float> sum(dim);
   while (!layer.empty()) {
-    std::sort(layer.begin(), layer.end());
+    std::sort(layer.begin(), layer.end());  // row by row: the reads stay in cache
     const std::vector<int> current = std::move(layer);
     layer.clear();
-    for (int i : current) {
-      const int x = i % width, y = i / width;
-      std::fill(sum.begin(), sum.end(), 0.0f);
-      int count = 0;
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int nx = x + dx, ny = y + dy;
-          if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
-          const size_t j = static_cast<size_t>(ny) * width + nx;
-          if (!filled[j]) continue;
-          for (int c = 0; c < dim; ++c) sum[c] += img.pixels[j * dim + c];
-          ++count;
-        }
-      for (int c = 0; c < dim; ++c)
-        img.pixels[static_cast<size_t>(i) * dim + c] = count ? sum[c] / count : 0.0f;
-    }
+    // A layer's texels read only earlier layers, so they are independent of each other and
+    // of their order: in parallel, with the same result on any thread count.
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, current.size(), 4096),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                        std::vector<float> sum(dim);
+                        for (size_t k = r.begin(); k < r.end(); ++k) {
+                          const int i = current[k];
+                          const int x = i % width, y = i / width;
+                          std::fill(sum.begin(), sum.end(), 0.0f);
+                          int count = 0;
+                          for (int dy = -1; dy <= 1; ++dy)
+                            for (int dx = -1; dx <= 1; ++dx) {
+                              const int nx = x + dx, ny = y + dy;
+                              if (nx < 0 || ny < 0 || nx >= width || ny >= height) continue;
+                              const size_t j = static_cast<size_t>(ny) * width + nx;
+                              if (!filled[j]) continue;
+                              for (int c = 0; c < dim; ++c) sum[c] += img.pixels[j * dim + c];
+                              ++count;
+                            }
+                          for (int c = 0; c < dim; ++c)
+                            img.pixels[static_cast<size_t>(i) * dim + c] = count ? sum[c] / count : 0.0f;
+                        }
+                      });
     for (int i : current) filled[i] = 1;
     for (int i : current) enqueue_neighbours(static_cast<size_t>(i));
   }
+}
+
+// Texels near a chart take the signal at the nearest point of the nearest triangle, so a
+// bilinear lookup anywhere inside the chart only mixes the chart's own signal.
+constexpr double kReach = 1.5;
+
+// Rows [y_begin, y_end) of a width × height bake: each texel within kReach of a face of
+// `faces` (every face when null; the earlier face at equal distance) takes `evaluate(f, b1,
+// b2, out)`, `dim` values at barycentric point (1 − b1 − b2, b1, b2) of face f, into `values`
+// (the rows' texels × dim, row y_begin first), its distance into `dist` (kInf elsewhere).
+template <class Evaluate>
+void bake_rows(const Mesh& mesh, int dim, int width, int height, int y_begin, int y_end,
+               const std::vector<int>* faces, const Evaluate& evaluate, float* values, double* dist) {
+  std::fill(dist, dist + static_cast<size_t>(y_end - y_begin) * width, kInf);
+  std::vector<double> value(dim);
+  const int count = faces ? static_cast<int>(faces->size()) : mesh.num_faces();
+  for (int k = 0; k < count; ++k) {
+    const int f = faces ? (*faces)[k] : k;
+    Vec2d t[3];
+    for (int c = 0; c < 3; ++c) t[c] = to_texel(mesh.uvs[mesh.face_uvs[f][c]], width, height);
+    if (!is_finite(t[0]) || !is_finite(t[1]) || !is_finite(t[2])) continue;
+    const double lo_x = std::min({t[0].x, t[1].x, t[2].x}) - kReach,
+                 hi_x = std::max({t[0].x, t[1].x, t[2].x}) + kReach;
+    const double lo_y = std::min({t[0].y, t[1].y, t[2].y}) - kReach,
+                 hi_y = std::max({t[0].y, t[1].y, t[2].y}) + kReach;
+    const int x0 = std::max(0, static_cast<int>(std::floor(lo_x - 0.5)));
+    const int x1 = std::min(width - 1, static_cast<int>(std::ceil(hi_x - 0.5)));
+    const int y0 = std::max({0, y_begin, static_cast<int>(std::floor(lo_y - 0.5))});
+    const int y1 = std::min({height - 1, y_end - 1, static_cast<int>(std::ceil(hi_y - 0.5))});
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        double b1 = 0, b2 = 0;
+        const double d = closest_point(t, {x + 0.5, y + 0.5}, b1, b2);
+        const size_t i = static_cast<size_t>(y - y_begin) * width + x;
+        if (d > kReach || !(d < dist[i])) continue;
+        dist[i] = d;
+        evaluate(f, b1, b2, value.data());
+        for (int c = 0; c < dim; ++c) values[i * dim + c] = static_cast<float>(value[c]);
+      }
+  }
+}
+
+// bake_signal's work for any signal (bake_rows over the whole image), the gutter filled.
+template <class Evaluate>
+Image bake_faces(const Mesh& mesh, int dim, int width, int height, const Evaluate& evaluate) {
+  Image img(width, height, dim, 0.0f);
+  const size_t n = static_cast<size_t>(width) * height;
+  std::vector<double> dist(n);
+  bake_rows(mesh, dim, width, height, 0, height, nullptr, evaluate, img.pixels.data(), dist.data());
+  std::vector<char> filled(n);
+  for (size_t i = 0; i < n; ++i) filled[i] = dist[i] < kInf;
+  fill_gutter(img, std::move(filled));
   return img;
 }
 
@@ -181,11 +210,11 @@ Image transfer_texture(const Mesh& source, const Image& texture, const Mesh& tar
   std::vector<TextureSource> sources(1);
   sources[0].image = texture;
   sources[0].wrap = wrap;
-  return transfer_textures(source, sources, std::vector<int>(source.faces.size(), 0), target, width, height,
-                           supersample);
+  return transfer_textures(source, std::move(sources), std::vector<int>(source.faces.size(), 0), target,
+                           width, height, supersample);
 }
 
-Image transfer_textures(const Mesh& source, const std::vector<TextureSource>& sources,
+Image transfer_textures(const Mesh& source, std::vector<TextureSource> sources,
                         const std::vector<int>& face_source, const Mesh& target, int width, int height,
                         int supersample) {
   const int nf = target.num_faces();
@@ -259,7 +288,7 @@ Image transfer_textures(const Mesh& source, const std::vector<TextureSource>& so
   std::vector<Signal> signals(ns);
   std::vector<std::vector<double>> constant(ns);
   for (int i = 0; i < ns; ++i) {
-    const TextureSource& src = sources[i];
+    TextureSource& src = sources[i];
     Signal& sig = signals[i];
     sig.dimension = channels;
     if (src.image.empty()) {
@@ -271,7 +300,7 @@ Image transfer_textures(const Mesh& source, const std::vector<TextureSource>& so
     }
     const Image& t = src.image;
     if (t.channels == channels) {
-      sig.texture = t;
+      sig.texture = std::move(src.image);  // an 8192² RGBA texture is a GiB as floats
     } else {
       const int a = t.alpha_channel(), colours = t.channels - (a >= 0 ? 1 : 0);
       sig.texture = Image(t.width, t.height, channels, 1.0f);
@@ -282,6 +311,7 @@ Image transfer_textures(const Mesh& source, const std::vector<TextureSource>& so
         for (int c = 0; c < out_colours; ++c) out[c] = colours == 3 ? in[c] : in[0];
         if (alpha >= 0 && a >= 0) out[alpha] = in[a];
       }
+      src.image = Image{};
     }
     sig.set_texture_coordinates(source.uvs, source.face_uvs, src.wrap);
     scale_colours(sig.texture, false);
@@ -325,24 +355,68 @@ Image transfer_textures(const Mesh& source, const std::vector<TextureSource>& so
           resize_area(from, std::max(1, (from.width + 1) / 2), std::max(1, (from.height + 1) / 2)));
     }
   }
-  const Image fine = bake_faces(target, channels, width * supersample, height * supersample,
-                                [&](int f, double b1, double b2, double* out) {
-                                  const int i = face_source[f];
-                                  if (signals[i].texture.empty())
-                                    std::copy(constant[i].begin(), constant[i].end(), out);
-                                  else
-                                    signals[i].evaluate(target, f, b1, b2, out);
-                                });
+  // Baked in bands of rows, supersampled: a texel is the mean of its samples near a chart
+  // (the rest of the gutter is filled at the texture's own size), so the supersampled image
+  // never exists whole (at 8192² and 2×2 it took 4 GiB of colours and 2 GiB of distances).
+  const int fw = width * supersample, fh = height * supersample;
+  constexpr int kBandRows = 16;  // texture rows per band
+  const int bands = (height + kBandRows - 1) / kBandRows;
+  std::vector<std::vector<int>> band_faces(bands);
+  for (int f = 0; f < nf; ++f) {
+    double lo = kInf, hi = -kInf;
+    for (int k = 0; k < 3; ++k) {
+      const double y = to_texel(target.uvs[target.face_uvs[f][k]], fw, fh).y;
+      lo = std::min(lo, y);
+      hi = std::max(hi, y);
+    }
+    if (!std::isfinite(lo) || !std::isfinite(hi)) continue;
+    const double first = std::floor((lo - kReach - 0.5) / supersample / kBandRows);
+    const double last = std::ceil((hi + kReach - 0.5) / supersample / kBandRows);
+    for (int b = static_cast<int>(std::clamp(first, 0.0, double(bands))); b < bands && b <= last; ++b)
+      band_faces[b].push_back(f);
+  }
   Image out(width, height, channels);
   out.channel_names = names;
   out.bits = bits;  // a 16-bit or float texture is not rounded to 8 bits on the way
-  const float weight = 1.0f / static_cast<float>(supersample * supersample);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      for (int dy = 0; dy < supersample; ++dy)
-        for (int dx = 0; dx < supersample; ++dx)
-          for (int c = 0; c < channels; ++c)
-            out.at(x, y, c) += weight * fine.at(x * supersample + dx, y * supersample + dy, c);
+  std::vector<char> near(static_cast<size_t>(width) * height, 0);
+  const auto evaluate = [&](int f, double b1, double b2, double* value) {
+    const int i = face_source[f];
+    if (signals[i].texture.empty())
+      std::copy(constant[i].begin(), constant[i].end(), value);
+    else
+      signals[i].evaluate(target, f, b1, b2, value);
+  };
+  tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& r) {
+    std::vector<float> values;
+    std::vector<double> dist;
+    std::vector<double> sum(channels);
+    for (int b = r.begin(); b < r.end(); ++b) {
+      const int y_begin = b * kBandRows, y_end = std::min(height, y_begin + kBandRows);
+      const int rows = (y_end - y_begin) * supersample;
+      values.assign(static_cast<size_t>(rows) * fw * channels, 0.0f);
+      dist.resize(static_cast<size_t>(rows) * fw);
+      bake_rows(target, channels, fw, fh, y_begin * supersample, y_end * supersample, &band_faces[b],
+                evaluate, values.data(), dist.data());
+      for (int y = y_begin; y < y_end; ++y)
+        for (int x = 0; x < width; ++x) {
+          std::fill(sum.begin(), sum.end(), 0.0);
+          int count = 0;
+          for (int dy = 0; dy < supersample; ++dy)
+            for (int dx = 0; dx < supersample; ++dx) {
+              const size_t i =
+                  static_cast<size_t>((y - y_begin) * supersample + dy) * fw + x * supersample + dx;
+              if (!(dist[i] < kInf)) continue;
+              for (int c = 0; c < channels; ++c) sum[c] += values[i * channels + c];
+              ++count;
+            }
+          if (count == 0) continue;
+          near[static_cast<size_t>(y) * width + x] = 1;
+          for (int c = 0; c < channels; ++c) out.at(x, y, c) = static_cast<float>(sum[c] / count);
+        }
+    }
+  });
+  signals.clear();  // the textures, before the gutter's work
+  fill_gutter(out, std::move(near));
   scale_colours(out, true);
   // Where the texture is wholly transparent its colour is lost in the premultiplied mean; a
   // reader filtering the straight colours (bilinear, mipmaps) would still mix it into the

@@ -127,7 +127,8 @@ struct TextureSource {
 /// (opaque where a source has none), and the deepest bits.
 /// \throw InputError as transfer_texture, and when a face names no source or an image has
 ///        other channels than grey or RGB with or without alpha among several.
-Image transfer_textures(const Mesh& source, const std::vector<TextureSource>& sources,
+/// The sources are taken by value: moved in, their images are resampled without a copy.
+Image transfer_textures(const Mesh& source, std::vector<TextureSource> sources,
                         const std::vector<int>& face_source, const Mesh& target, int width, int height,
                         int supersample = 2);
 
