@@ -410,7 +410,7 @@ void check_material_coordinates(const std::string& file, const isochart::Mesh& m
 }
 
 MaterialImages read_material_images(const std::string& file, const isochart::Mesh& mesh,
-                                    const std::string& beside) {
+                                    const std::string& beside, bool lenient) {
   const std::vector<isochart::MeshTexture> textures = isochart::find_material_textures(file, mesh);
   MaterialImages c;
   const int nf = mesh.num_faces();
@@ -430,11 +430,17 @@ MaterialImages read_material_images(const std::string& file, const isochart::Mes
         const std::string label = m < static_cast<int>(mesh.material_names.size())
                                       ? "material " + mesh.material_names[m]
                                       : "material " + std::to_string(m);
-        if (!t.problem.empty()) throw isochart::InputError(file, t.problem + " (" + label + ")");
-        c.sources.back().image = read_mesh_texture(t, beside, file);
         c.sources.back().wrap = t.wrap;
         c.sources.back().colour = t.colour;
-        if (!t.file.empty()) c.files.push_back(t.file);
+        try {
+          if (!t.problem.empty()) throw isochart::InputError(file, t.problem + " (" + label + ")");
+          c.sources.back().image = read_mesh_texture(t, beside, file);
+          if (!t.file.empty()) c.files.push_back(t.file);
+        } catch (const isochart::InputError& e) {
+          if (!lenient) throw;
+          const std::string where = e.file().empty() || e.file() == file ? "" : e.file() + ": ";
+          c.skipped.push_back(label + ": " + where + e.what());
+        }
       }
     }
     if (c.sources[slot].image.empty()) ++c.untextured_faces;

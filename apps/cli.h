@@ -261,13 +261,15 @@ struct MaterialImages {
   isochart::Mesh source;           // the mesh with the coordinates its materials read
   long long untextured_faces = 0;  // faces reading a colour, no image
   std::vector<std::string> files;  // the image files read
+  std::vector<std::string> skipped;  // with `lenient`: why a material's image was not read
 };
 /// Reads every material of `mesh` (loaded from `file`): faces of no material, or of one no
 /// file defines, read white; coordinates moved per face by its material's map.
 /// \throw isochart::InputError naming `file` and the material when one cannot be used, or its
-///        image when that cannot be read (read_mesh_texture, embedded images through `beside`).
+///        image when that cannot be read (read_mesh_texture, embedded images through `beside`);
+///        with `lenient` such a material's faces read its colour instead, and `skipped` says why.
 MaterialImages read_material_images(const std::string& file, const isochart::Mesh& mesh,
-                                    const std::string& beside);
+                                    const std::string& beside, bool lenient = false);
 
 /// Seconds since `t0`.
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {

@@ -146,7 +146,9 @@ void run_render(const Context& ctx, const RenderArgs& a) {
       try {
         if (t.several_materials && !mesh.face_materials.empty()) {
           // Each face in its own material's image, or its colour where the material has none.
-          materials = read_material_images(a.input, mesh, a.output);
+          materials = read_material_images(a.input, mesh, a.output, true);
+          for (const std::string& why : materials.skipped)
+            ctx.warn(a.input, why + "; its faces are drawn in the material's colour");
           if (materials.untextured_faces == mesh.num_faces()) {
             materials = {};
           } else {

@@ -1173,5 +1173,13 @@ TEST_CASE("isocharts atlas --bake-texture carries each material's texture, or it
     }
   CHECK(bluish > 2000);
   CHECK(greenish > 2000);
+  // A material whose image is missing is drawn in its colour, the others textured, and said.
+  std::filesystem::rename(dir + "/b.png", dir + "/b_gone.png");
+  REQUIRE(run("--json render " + dir + "/in.obj -o " + dir +
+              "/r2.png --views 1 --ortho --up z --width 240 "
+              "--height 240") == 0);
+  CHECK(read_text(dir + "/err.txt").find("material b") != std::string::npos);
+  CHECK(read_text(dir + "/out.txt").find("\"textured\"") != std::string::npos);
+  std::filesystem::rename(dir + "/b_gone.png", dir + "/b.png");
   if (!std::getenv("KEEP_MATERIALS_TEST")) std::filesystem::remove_all(tmp);
 }
