@@ -1,11 +1,13 @@
 // isocharts: the command-line front end. Exit codes: 0 ok, 1 internal failure, 2 bad input.
 
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <cctype>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <string>
-
-#include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include "cli.h"
 #include "isochart/error.h"
@@ -97,6 +99,25 @@ int main(int argc, char** argv) {
     }
     std::cerr << "isocharts: error: " << cli::parse_error_message(app, e) << "\n";
     return 2;
+  }
+  // `--report --threads=2` takes "--threads=2" as the report's file name: the run went on with
+  // the default threads and left a file of that name. No value of ours starts with "--".
+  {
+    std::string bad;
+    std::function<void(const CLI::App*)> scan = [&](const CLI::App* a) {
+      for (const CLI::Option* o : a->get_options())
+        for (const std::string& r : o->results())
+          if (bad.empty() && r.size() > 2 && r.compare(0, 2, "--") == 0 &&
+              std::isalpha(static_cast<unsigned char>(r[2])))
+            bad = o->get_name() + ": got '" + r + "', which is an option, not a value (write ./" + r +
+                  " for a file of that name)";
+      for (const CLI::App* s : a->get_subcommands()) scan(s);
+    };
+    scan(&app);
+    if (!bad.empty()) {
+      std::cerr << "isocharts: error: " << bad << "\n";
+      return 2;
+    }
   }
 
   const int threads = ctx.opts.threads > 0 ? ctx.opts.threads : tbb::info::default_concurrency();

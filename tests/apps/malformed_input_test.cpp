@@ -544,6 +544,14 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --report: expected a value, got ''\n"));
   CHECK(run_cli(atlas + " --png=", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --png: expected a value, got ''\n"));
+  // An option taken as the value before it: the run went on and wrote a file named after it.
+  CHECK(run_cli(atlas + " --report --threads=2", err) == 2);
+  CHECK_THAT(line(),
+             Catch::Equals("isocharts: error: --report: got '--threads=2', which is an option, not a value "
+                           "(write ./--threads=2 for a file of that name)\n"));
+  CHECK_FALSE(fs::exists("--threads=2"));
+  CHECK(run_cli("remesh builtin:sphere -o --png", err) == 2);
+  CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --output: got '--png', which is an option"));
   // An output in a directory that does not exist is refused before the work, not after it.
   const std::string nodir = (tmp.path / "no_such_dir").string();
   CHECK(run_cli("atlas builtin:sphere -o '" + nodir + "/a.obj'", err) == 2);
