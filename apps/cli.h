@@ -8,6 +8,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <initializer_list>
 #include <memory>
@@ -106,6 +108,25 @@ inline std::string plain_number(double x) {
   return t;
 }
 
+/// A range's end in fixed notation with the fewest decimals that keep it inside the range
+/// (rounded up for a lower end, down for an upper one): 1/16384 printed as "0.000061" was
+/// below the range, and typed back it was refused by the range it was quoted from.
+inline std::string bound_number(double x, bool lower) {
+  for (int decimals = 6; decimals <= 20; ++decimals) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, x);
+    const double back = std::strtod(buf, nullptr);
+    if (!(lower ? back >= x : back <= x)) continue;
+    std::string t = buf;
+    if (t.find('.') != std::string::npos) {
+      while (t.back() == '0') t.pop_back();
+      if (t.back() == '.') t.pop_back();
+    }
+    return t;
+  }
+  return plain_number(x);
+}
+
 /// A number in [lo, hi]. CLI::Range compares with < and >, so "nan" passed it.
 inline CLI::Validator number_in(double lo, double hi) {
   return CLI::Validator(
@@ -117,11 +138,11 @@ inline CLI::Validator number_in(double lo, double hi) {
         } catch (const std::exception&) {
         }
         // CLI::Range's wording, which Context rewrites for every range alike.
-        return "Value " + v + " not in range " + std::to_string(lo) + " to " + std::to_string(hi);
+        return "Value " + v + " not in range " + bound_number(lo, true) + " to " + bound_number(hi, false);
       },
       // The help's wording of CLI::Range, with the bounds written as the error writes them
-      // (0.000061, not 6.10352e-05).
-      "FLOAT in [" + plain_number(lo) + " - " + plain_number(hi) + "]");
+      // (0.00006104, not 6.10352e-05).
+      "FLOAT in [" + bound_number(lo, true) + " - " + bound_number(hi, false) + "]");
 }
 
 /// A seed: 0 .. 2^64 − 1 in decimal. CLI11 would take "-1" or a 30-digit number silently

@@ -807,6 +807,12 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
     bad_option("--max-linf must be a finite number of at least 1");
   if (!sweep_text.empty()) a.sweep = sweep_text == "none" ? std::vector<double>{} : parse_list(sweep_text);
   const std::vector<Method> methods = parse_methods_impl(a.methods);
+  if (a.atlas_aspect > 0 &&
+      std::none_of(methods.begin(), methods.end(), [](const Method& m) {
+        return m.kind == Kind::ExternalAuto || m.kind == Kind::ExternalFile;
+      }))
+    bad_option("--atlas-aspect goes with an external atlas (--methods external or external:FILE)");
+  if (!a.sweep.empty() && a.sweep_max_faces <= 0) bad_option("--sweep-max-faces 0 sweeps no mesh; give --sweep none for no sweep");
   {
     // A mistyped --data would otherwise bench the built-in meshes without a word.
     std::error_code ec;
@@ -835,7 +841,12 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
     if (meth.kind == Kind::ExternalFile) bench.load_external(meth.file);
   {
     std::error_code ec;
-    fs::create_directories(a.out, ec);
+    // Only the directory itself is made, like every other output's: a mistyped parent would
+    // otherwise grow a tree of directories without a word.
+    const fs::path parent = fs::path(a.out).lexically_normal().parent_path();
+    if (!parent.empty() && !fs::is_directory(parent, ec))
+      throw isochart::InputError(a.out, "cannot write: directory " + parent.string() + " does not exist");
+    fs::create_directory(a.out, ec);
     std::error_code kind;
     if (!fs::is_directory(a.out, kind)) {
       if (fs::exists(a.out, kind))
@@ -860,6 +871,14 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
         n += methods.size() > 1 ? found : std::max(1, found);
       }
   for (std::size_t i = 0; i < a.meshes.size(); ++i) bench.run_mesh(a.meshes[i], meshes[i], k, n);
+  // A table of n/a rows only is a failed run, not a result; the rows say why.
+  if (std::all_of(bench.rows().begin(), bench.rows().end(), [](const Row& r) { return r.note.rfind("n/a", 0) == 0; })) {
+    std::string why = bench.rows().empty() ? std::string("no rows") : bench.rows().front().note.substr(5);
+    throw isochart::InputError(a.out, "no method gave a result on any mesh (" + why + ")");
+  }
+  if (!a.sweep.empty() && bench.sweep_points().empty())
+    ctx.warn(a.out, "no mesh has at most --sweep-max-faces " + std::to_string(a.sweep_max_faces) +
+                        " faces: the sweep is empty");
 
   const std::string md = to_markdown(bench.rows(), bench.sweep_points(), a);
   const fs::path out(a.out);

@@ -51,7 +51,8 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   if (int(a.charts) + int(a.shaded) + int(!a.texture.empty()) > 1)
     bad_option("--charts, --shaded and --texture are exclusive");
-  if (a.uv_layout && a.shaded) bad_option("--uv-layout draws the atlas itself; it takes no --shaded");
+  if (a.uv_layout && (a.shaded || a.charts))
+    bad_option("--uv-layout draws the atlas itself, its charts coloured; it takes no --shaded or --charts");
   ctx.check_paths({a.input, a.texture}, {a.output});
   ctx.check_image_outputs({a.output});
   if (a.uv_layout && (!a.texture.empty() || a.wireframe || a.ortho || a.transparent))

@@ -261,11 +261,25 @@ TEST_CASE("bench: only external methods and no baseline atlas for the mesh: an n
   const fs::path dir = fresh_dir("no_baseline");
   const fs::path out = dir / "out", err = dir / "stderr.txt";
   fs::create_directories(dir / "data" / "baseline_atlases");
+  // Nothing to compare at all is a failed run (it exited 0 with one n/a row), saying why.
   REQUIRE(run_cli("bench builtin:sphere --methods external --data '" + (dir / "data").string() +
                       "' --sweep none --no-plots --out '" + out.string() + "'",
+                  err) == 2);
+  {
+    std::ifstream e(err);
+    const std::string text((std::istreambuf_iterator<char>(e)), std::istreambuf_iterator<char>());
+    CHECK_THAT(text, Catch::Contains("no method gave a result on any mesh (no baseline atlas "));
+    CHECK_THAT(text, Catch::Contains("sphere_*.obj)"));
+  }
+  CHECK(!fs::exists(out / "bench.csv"));
+  // With a mesh that has one, the other's row is n/a and says why.
+  REQUIRE(run_cli("atlas builtin:torus -o '" + (dir / "data" / "baseline_atlases" / "torus_x.obj").string() + "'",
+                  err) == 0);
+  REQUIRE(run_cli("bench builtin:sphere builtin:torus --methods external --data '" + (dir / "data").string() +
+                      "' --res 16 --sweep none --no-plots --out '" + out.string() + "'",
                   err) == 0);
   const auto rows = read_csv(out / "bench.csv");
-  REQUIRE(rows.size() == 1);
+  REQUIRE(rows.size() == 2);
   CHECK(rows[0].at("method") == "external");
   CHECK(rows[0].at("note").rfind("n/a: no baseline atlas ", 0) == 0);
   CHECK(rows[0].at("note").find("sphere_*.obj") != std::string::npos);

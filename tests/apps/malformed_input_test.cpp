@@ -565,12 +565,21 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(run_cli("render builtin:sphere -o /sys/isocharts_test_view.png", err) == 2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: /sys/isocharts_test_view.png: cannot write"));
   CHECK(run_cli("stats builtin:sphere --aspect 0", err) == 2);
-  CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect: expected a number from 0.000061 to 16384, got '0'\n"));
+  CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect: expected a number from 0.00006104 to 16384, got '0'\n"));
+  // The bound quoted is inside the range (1/16384 printed as 0.000061 was refused when typed back).
+  CHECK(run_cli("stats builtin:sphere --aspect 0.000061", err) == 2);
+  {
+    const fs::path atlas_file = tmp.path / "aspect_atlas.obj";
+    REQUIRE(run_cli("atlas builtin:sphere -o '" + atlas_file.string() + "'", err) == 0);
+    CHECK(run_cli("stats '" + atlas_file.string() + "' --aspect 0.00006104", err) == 0);
+    CHECK(run_cli("stats '" + atlas_file.string() + "' --aspect 16384", err) == 0);
+    fs::remove(atlas_file);
+  }
   {
     // The help writes the range as the error does (it said 6.10352e-05).
     const fs::path help = tmp.path / "help.txt";
     CHECK(run_cli("stats --help | tee '" + help.string() + "'", err) == 0);
-    CHECK_THAT(read_bytes(help), Catch::Contains("--aspect FLOAT:FLOAT in [0.000061 - 16384]"));
+    CHECK_THAT(read_bytes(help), Catch::Contains("--aspect FLOAT:FLOAT in [0.00006104 - 16384]"));
     fs::remove(help);  // the checks below count what a failing command leaves behind
   }
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --width 4096 --height 4096", err) ==
@@ -599,6 +608,23 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --atlas-aspect 2", err) ==
         2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --atlas-aspect goes with --atlas\n"));
+  // Accepted and doing nothing: the layout is always drawn with its charts coloured.
+  CHECK(run_cli("render builtin:sphere --uv-layout --charts -o '" + (tmp.path / "v.png").string() + "'", err) == 2);
+  CHECK_THAT(line(), Catch::Contains("--uv-layout draws the atlas itself, its charts coloured; it takes no --shaded or --charts"));
+  const std::string bench = "bench builtin:sphere --methods isochart --res 16 --sweep none --no-plots --out '" +
+                            (tmp.path / "b").string() + "'";
+  CHECK(run_cli(bench + " --atlas-aspect 2", err) == 2);
+  CHECK_THAT(line(), Catch::Contains("--atlas-aspect goes with an external atlas"));
+  CHECK(run_cli("bench builtin:sphere --methods isochart --sweep 1.2 --sweep-max-faces 0 --out '" +
+                    (tmp.path / "b").string() + "'",
+                err) == 2);
+  CHECK_THAT(line(), Catch::Contains("--sweep-max-faces 0 sweeps no mesh; give --sweep none for no sweep"));
+  // --out makes its directory, not a tree of them under a mistyped parent.
+  CHECK(run_cli("bench builtin:sphere --methods isochart --res 16 --sweep none --no-plots --out '" +
+                    (tmp.path / "no_such" / "b").string() + "'",
+                err) == 2);
+  CHECK_THAT(line(), Catch::Contains("cannot write: directory " + (tmp.path / "no_such").string() + " does not exist"));
+  CHECK_FALSE(fs::exists(tmp.path / "no_such"));
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --aspect 2", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect goes with --uv-layout\n"));
   // Quiet won silently over verbose.
