@@ -350,6 +350,10 @@ class GltfReader {
         for (std::size_t i = 0; i < nv; ++i) idx[i] = static_cast<std::uint32_t>(i);
       }
       const std::size_t n = idx.size();
+      // glTF requires it; the corners left over were dropped without a word.
+      if (mode == TINYGLTF_MODE_TRIANGLES && n % 3 != 0)
+        fail(what + ": triangles from " + std::to_string(n) + (p.indices >= 0 ? " indices" : " vertices") +
+             ", not a multiple of 3");
       const std::size_t triangles = mode == TINYGLTF_MODE_TRIANGLES ? n / 3 : (n >= 2 ? n - 2 : 0);
       check_face_limit(path_, static_cast<long long>(raw_.polygons.size() + triangles), options_);
       const int group = groups_++;
@@ -443,6 +447,9 @@ std::string first_line(const std::string& s) {
   // nlohmann's messages start with an internal tag such as "[json.exception.parse_error.101] ".
   if (line.substr(0, 16) == "[json.exception." && line.find("] ") != std::string_view::npos)
     line.remove_prefix(line.find("] ") + 2);
+  // tinygltf quotes a buffer's whole data: URI, base64 and all, and not what is wrong with it.
+  if (line.substr(0, 30) == "Failed to decode 'uri' : data:")
+    return "a buffer's data: URI does not decode to its byteLength (not base64, or shorter than byteLength)";
   return std::string(line.substr(0, 200));
 }
 

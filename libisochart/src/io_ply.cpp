@@ -213,6 +213,15 @@ class RecordReader {
     return n;
   }
 
+  /// An ASCII record ends with its line: values beyond the header's properties mean the file
+  /// does not match its header (OFF's reader refuses the like).
+  void end() {
+    if (!ascii_) return;
+    std::string_view tok;
+    if (next_token(rest_, tok))
+      fail("more values on this line than the header declares (" + quoted(tok) + " is one too many)");
+  }
+
   /// What follows the last record that is not blank (ASCII) or padding (binary zeros and
   /// white space): "" when nothing, else a description of it ending in "follow(s)".
   std::string trailing() {
@@ -494,6 +503,7 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
             break;
         }
       }
+      in.end();
       if (is_face && corner_uv) {
         const auto& poly = raw.polygons[static_cast<std::size_t>(i)];
         const auto& puv = raw.polygon_uvs[static_cast<std::size_t>(i)];

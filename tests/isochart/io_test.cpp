@@ -551,6 +551,19 @@ TEST_CASE("PLY: float colours stored as 0..255 are scaled, with a warning", "[io
              Catch::Contains("float vertex colours reach 300, beyond both [0, 1] and the 8-bit range"));
 }
 
+TEST_CASE("PLY: an ASCII line with more values than the header declares is refused", "[io]") {
+  // OFF refuses data past its header's counts; these were read as far as the header said.
+  TempDir d;
+  const std::string head =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  CHECK(read_raw_mesh(d.write("ok.ply", head + "0 0 0\n1 0 0 \t\n0 1 0\n3 0 1 2\n")).polygons.size() == 1);
+  CHECK_THAT(load_error(d.write("v.ply", head + "0 0 0 7\n1 0 0\n0 1 0\n3 0 1 2\n")),
+             Catch::Contains("line 10: vertex 0: more values on this line than the header declares ('7' is one too many)"));
+  CHECK_THAT(load_error(d.write("f.ply", head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 3\n")),
+             Catch::Contains("line 13: face 0: more values on this line than the header declares ('3' is one too many)"));
+}
+
 TEST_CASE("PLY: face colours are named as not read", "[io]") {
   TempDir d;
   const RawMesh raw = read_raw_mesh(d.write(
@@ -708,6 +721,26 @@ std::string glb_of(const GltfSample& s) {
 }
 
 }  // namespace
+
+TEST_CASE("glTF: triangles from a count that is not a multiple of 3, and a short data: URI, are said", "[io]") {
+  TempDir d;
+  const GltfSample s = gltf_sample();
+  // Mesh 0's first primitive: 6 indices; 5 of them, or its 4 vertices without indices.
+  nlohmann::json doc = s.doc;
+  doc["accessors"][3]["count"] = 5;
+  GltfSample cut{s.bin, doc};
+  CHECK_THAT(load_error(d.write("i.gltf", gltf_text(cut))), Catch::Contains("triangles from 5 indices, not a multiple of 3"));
+  doc = s.doc;
+  doc["meshes"][0]["primitives"][0].erase("indices");
+  GltfSample noidx{s.bin, doc};
+  CHECK_THAT(load_error(d.write("n.gltf", gltf_text(noidx))), Catch::Contains("triangles from 4 vertices, not a multiple of 3"));
+  // byteLength beyond the data: tinygltf's message quoted the whole base64 text.
+  nlohmann::json big = nlohmann::json::parse(gltf_text(s));
+  big["buffers"][0]["byteLength"] = s.bin.size() + 1000;
+  const std::string e = load_error(d.write("b.gltf", big.dump()));
+  CHECK_THAT(e, Catch::Contains("invalid glTF: a buffer's data: URI does not decode to its byteLength"));
+  CHECK_THAT(e, !Catch::Contains(";base64,"));
+}
 
 TEST_CASE("glTF: primitives, modes, index types and transforms", "[io]") {
   TempDir d;
