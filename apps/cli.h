@@ -27,14 +27,14 @@
 namespace cli {
 
 struct GlobalOptions {
-  int threads = 0;          // 0 = all cores
-  std::uint64_t seed = 1;   // every random choice derives from this
+  int threads = 0;         // 0 = all cores
+  std::uint64_t seed = 1;  // every random choice derives from this
   bool quiet = false;
   int verbose = 0;
-  bool json = false;        // print the result as one JSON object
-  std::string report;       // also save the JSON result here
-  bool no_repair = false;   // treat repairable mesh problems as errors
-  bool weld = false;        // join vertices at identical positions in every input
+  bool json = false;       // print the result as one JSON object
+  std::string report;      // also save the JSON result here
+  bool no_repair = false;  // treat repairable mesh problems as errors
+  bool weld = false;       // join vertices at identical positions in every input
 };
 
 /// Shared state handed to subcommands.
@@ -73,17 +73,16 @@ struct Context {
 constexpr int kMaxImageSide = 2048;
 
 /// CLI11's own PositiveNumber prints the range 0 .. DBL_MAX in full; this names the rule.
-inline const CLI::Validator positive{
-    [](std::string& v) {
-      try {
-        std::size_t used = 0;
-        const double x = std::stod(v, &used);
-        if (used == v.size() && x > 0 && x <= 1e300) return std::string();
-      } catch (const std::exception&) {
-      }
-      return "expected a positive number, got '" + v + "'";
-    },
-    "POSITIVE"};
+inline const CLI::Validator positive{[](std::string& v) {
+                                       try {
+                                         std::size_t used = 0;
+                                         const double x = std::stod(v, &used);
+                                         if (used == v.size() && x > 0 && x <= 1e300) return std::string();
+                                       } catch (const std::exception&) {
+                                       }
+                                       return "expected a positive number, got '" + v + "'";
+                                     },
+                                     "POSITIVE"};
 
 /// A finite number >= 0.
 inline const CLI::Validator non_negative{[](std::string& v) {
@@ -149,8 +148,8 @@ inline CLI::Validator number_in(double lo, double hi) {
 /// (wrapped or saturated), and a run could not be repeated from its printed seed.
 inline const CLI::Validator seed_value{
     [](std::string& v) {
-      const bool digits = !v.empty() && v.size() <= 20 &&
-                          v.find_first_not_of("0123456789") == std::string::npos;
+      const bool digits =
+          !v.empty() && v.size() <= 20 && v.find_first_not_of("0123456789") == std::string::npos;
       if (digits && (v.size() < 20 || v <= "18446744073709551615")) return std::string();
       return "expected an integer from 0 to 18446744073709551615, got '" + v + "'";
     },
@@ -278,10 +277,10 @@ void check_material_coordinates(const std::string& file, const isochart::Mesh& m
 /// materials): each material's image read once, or its colour where it names none.
 struct MaterialImages {
   std::vector<isochart::TextureSource> sources;
-  std::vector<int> face_source;    // per face, into sources
-  isochart::Mesh source;           // the mesh with the coordinates its materials read
-  long long untextured_faces = 0;  // faces reading a colour, no image
-  std::vector<std::string> files;  // the image files read
+  std::vector<int> face_source;      // per face, into sources
+  isochart::Mesh source;             // the mesh with the coordinates its materials read
+  long long untextured_faces = 0;    // faces reading a colour, no image
+  std::vector<std::string> files;    // the image files read
   std::vector<std::string> skipped;  // with `lenient`: why a material's image was not read
 };
 /// Reads every material of `mesh` (loaded from `file`): faces of no material, or of one no

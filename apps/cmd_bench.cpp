@@ -135,7 +135,8 @@ std::vector<std::string> default_meshes(const std::string& data) {
 }
 
 // DATA/baseline_atlases/NAME_TOOL.obj for mesh NAME, as ("external:TOOL", file), sorted.
-std::vector<std::pair<std::string, std::string>> auto_externals(const std::string& data, const std::string& name) {
+std::vector<std::pair<std::string, std::string>> auto_externals(const std::string& data,
+                                                                const std::string& name) {
   const fs::path dir = fs::path(data) / "baseline_atlases";
   std::error_code ec;
   std::vector<std::string> files;
@@ -318,7 +319,8 @@ class Bench {
     mcgim::DistanceOptions dopt;
     dopt.samples = a_.psnr_samples;
     dopt.seed = ctx_.opts.seed;
-    const mcgim::DistanceResult d = mcgim::measure_distance(b.geometry, lv.remesh.mesh, dopt, ctx_.progress());
+    const mcgim::DistanceResult d =
+        mcgim::measure_distance(b.geometry, lv.remesh.mesh, dopt, ctx_.progress());
     r.psnr = d.psnr;
     r.s_psnr = d.seconds;
     // An infinite stretch needs its reason (one turned triangle of thousands makes it infinite).
@@ -366,7 +368,8 @@ class Bench {
           r.faces = mesh.num_faces();
           r.closed = closed;
           r.method = "external";
-          r.note = "n/a: no baseline atlas " + (fs::path(a_.data) / "baseline_atlases" / (name + "_*.obj")).string();
+          r.note = "n/a: no baseline atlas " +
+                   (fs::path(a_.data) / "baseline_atlases" / (name + "_*.obj")).string();
           rows_.push_back(r);
           line(r, ++k, n);
           continue;
@@ -391,7 +394,8 @@ class Bench {
             // Its remesh is measured against its own geometry: that must be this mesh's.
             check_atlas_matches(mesh, b.geometry, "");
           } else {
-            b = build(mesh, meth.kind, a_.max_l2, meth.kind == Kind::LscmStretch ? lscm_cache.get() : nullptr);
+            b = build(mesh, meth.kind, a_.max_l2,
+                      meth.kind == Kind::LscmStretch ? lscm_cache.get() : nullptr);
             if (meth.kind == Kind::Lscm) lscm_cache = std::make_unique<isochart::Atlas>(b.atlas);
           }
           measure(r, b, target);
@@ -409,7 +413,8 @@ class Bench {
         line(r, ++k, n);
       }
     }
-    if (a_.sweep_max_faces > 0 && mesh.num_faces() <= a_.sweep_max_faces && !a_.sweep.empty()) sweep(mesh, name);
+    if (a_.sweep_max_faces > 0 && mesh.num_faces() <= a_.sweep_max_faces && !a_.sweep.empty())
+      sweep(mesh, name);
   }
 
   void sweep(const isochart::Mesh& mesh, const std::string& name) {
@@ -469,13 +474,15 @@ std::string csv_quote(const std::string& s) {
 std::string to_csv(const std::vector<Row>& rows) {
   std::ostringstream s;
   s << "mesh,faces,closed,method,charts,l2,linf,packing_ratio,width,height,defined_samples,unique_samples,"
-       "target_samples,defined_diff_percent,psnr_db,seconds_atlas,seconds_packing,seconds_mcgim,seconds_psnr,note\n";
+       "target_samples,defined_diff_percent,psnr_db,seconds_atlas,seconds_packing,seconds_mcgim,seconds_psnr,"
+       "note\n";
   for (const Row& r : rows) {
     const bool ok = r.note.rfind("n/a", 0) != 0;
-    s << csv_quote(r.mesh) << "," << r.faces << "," << (r.closed ? 1 : 0) << "," << csv_quote(r.method) << ",";
+    s << csv_quote(r.mesh) << "," << r.faces << "," << (r.closed ? 1 : 0) << "," << csv_quote(r.method)
+      << ",";
     if (ok) {
-      s << r.charts << "," << csv_num(r.l2, 6) << "," << csv_num(r.linf, 6) << "," << csv_num(r.packing, 4) << ","
-        << r.width << "," << r.height << "," << r.defined << "," << r.unique << "," << r.target << ","
+      s << r.charts << "," << csv_num(r.l2, 6) << "," << csv_num(r.linf, 6) << "," << csv_num(r.packing, 4)
+        << "," << r.width << "," << r.height << "," << r.defined << "," << r.unique << "," << r.target << ","
         << csv_num(100.0 * (r.defined - r.target) / std::max<long long>(r.target, 1), 4) << ","
         << csv_num(r.psnr, 6) << ",";
     } else {
@@ -496,7 +503,8 @@ std::string sweep_csv(const std::vector<SweepPoint>& pts) {
   return s.str();
 }
 
-std::string to_markdown(const std::vector<Row>& rows, const std::vector<SweepPoint>& pts, const BenchArgs& a) {
+std::string to_markdown(const std::vector<Row>& rows, const std::vector<SweepPoint>& pts,
+                        const BenchArgs& a) {
   std::ostringstream s;
   s << "| mesh | faces | method | charts | L2 | Linf | packing | resolution | defined | unique | PSNR (dB) | "
        "atlas s | pack s | MCGIM s | PSNR s | note |\n"
@@ -506,11 +514,12 @@ std::string to_markdown(const std::vector<Row>& rows, const std::vector<SweepPoi
     s << "| " << r.mesh << " | " << r.faces << " | " << r.method << " | ";
     if (ok)
       s << r.charts << " | " << fmt(r.l2, 3) << " | " << fmt(r.linf, 2) << " | " << fmt(r.packing, 3) << " | "
-        << r.width << "×" << r.height << " | " << r.defined << " | " << r.unique << " | " << fmt(r.psnr, 2) << " | ";
+        << r.width << "×" << r.height << " | " << r.defined << " | " << r.unique << " | " << fmt(r.psnr, 2)
+        << " | ";
     else
       s << "– | – | – | – | – | – | – | – | ";
-    s << fmt(r.s_atlas, 1) << " | " << fmt(r.s_pack, 1) << " | " << fmt(r.s_mcgim, 1) << " | " << fmt(r.s_psnr, 1)
-      << " | " << r.note << " |\n";
+    s << fmt(r.s_atlas, 1) << " | " << fmt(r.s_pack, 1) << " | " << fmt(r.s_mcgim, 1) << " | "
+      << fmt(r.s_psnr, 1) << " | " << r.note << " |\n";
   }
   // Iso-charts against the lscm baseline, per mesh: PSNR at matched samples and chart counts.
   std::map<std::string, std::map<std::string, const Row*>> by;
@@ -580,8 +589,9 @@ std::string to_markdown(const std::vector<Row>& rows, const std::vector<SweepPoi
 struct Rgb {
   float r, g, b;
 };
-const Rgb kPalette[] = {{0.12f, 0.47f, 0.71f}, {1.0f, 0.5f, 0.05f}, {0.17f, 0.63f, 0.17f}, {0.84f, 0.15f, 0.16f},
-                        {0.58f, 0.4f, 0.74f},  {0.55f, 0.34f, 0.29f}, {0.89f, 0.47f, 0.76f}, {0.5f, 0.5f, 0.5f}};
+const Rgb kPalette[] = {{0.12f, 0.47f, 0.71f}, {1.0f, 0.5f, 0.05f},  {0.17f, 0.63f, 0.17f},
+                        {0.84f, 0.15f, 0.16f}, {0.58f, 0.4f, 0.74f}, {0.55f, 0.34f, 0.29f},
+                        {0.89f, 0.47f, 0.76f}, {0.5f, 0.5f, 0.5f}};
 const Rgb kBlack{0, 0, 0}, kGrey{0.85f, 0.85f, 0.85f};
 
 const char* glyph(char c) {
@@ -636,7 +646,9 @@ class Canvas {
                  x + static_cast<int>(i) * 4 * scale + q * scale + scale - 1, y + r * scale + scale - 1, c);
     }
   }
-  static int text_width(const std::string& s, int scale = 2) { return static_cast<int>(s.size()) * 4 * scale; }
+  static int text_width(const std::string& s, int scale = 2) {
+    return static_cast<int>(s.size()) * 4 * scale;
+  }
   const isochart::Image& image() const { return img_; }
   int width() const { return img_.width; }
   int height() const { return img_.height; }
@@ -693,8 +705,8 @@ void draw_axes(Canvas& c, const Axes& ax, const std::string& title, const std::s
 
 // One colour per method in every plot.
 Rgb color_of(const std::string& method) {
-  static const char* known[] = {"isochart", "isomap-nocut", "lscm", "lscm+stretch", "external:uvatlas",
-                                "external:xatlas"};
+  static const char* known[] = {"isochart",     "isomap-nocut",     "lscm",
+                                "lscm+stretch", "external:uvatlas", "external:xatlas"};
   for (int i = 0; i < 6; ++i)
     if (method == known[i]) return kPalette[i];
   std::size_t h = 0;
@@ -735,8 +747,8 @@ isochart::Image plot_sweep(const std::vector<SweepPoint>& pts, const std::string
     });
     for (std::size_t i = 0; i < s.size(); ++i) {
       const double x = ax.px(s[i]->charts), y = ax.py(s[i]->l2);
-      c.rect(static_cast<int>(x) - 3, static_cast<int>(y) - 3, static_cast<int>(x) + 3, static_cast<int>(y) + 3,
-             color_of(methods[m]));
+      c.rect(static_cast<int>(x) - 3, static_cast<int>(y) - 3, static_cast<int>(x) + 3,
+             static_cast<int>(y) + 3, color_of(methods[m]));
       if (i > 0) c.line(ax.px(s[i - 1]->charts), ax.py(s[i - 1]->l2), x, y, color_of(methods[m]), 2);
     }
   }
@@ -759,7 +771,8 @@ isochart::Image plot_psnr(const std::vector<Row>& rows) {
   const int group = std::max(60, 10 * static_cast<int>(methods.size()) + 14);
   const int w = std::max(640, 90 + group * static_cast<int>(meshes.size()) + 190);
   Canvas c(w, 440);
-  Axes ax{90, 50, 90 + group * static_cast<int>(meshes.size()), 370, 0, 1, std::floor(lo - 3), std::ceil(hi + 1)};
+  Axes ax{
+      90, 50, 90 + group * static_cast<int>(meshes.size()), 370, 0, 1, std::floor(lo - 3), std::ceil(hi + 1)};
   draw_axes(c, ax, "GEOMETRY PSNR AT MATCHED DEFINED SAMPLES", "MESH", "PSNR DB", false);
   for (std::size_t mi = 0; mi < meshes.size(); ++mi) {
     const int gx = ax.x0 + static_cast<int>(mi) * group + 7;
@@ -807,12 +820,12 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
     bad_option("--max-linf must be a finite number of at least 1");
   if (!sweep_text.empty()) a.sweep = sweep_text == "none" ? std::vector<double>{} : parse_list(sweep_text);
   const std::vector<Method> methods = parse_methods_impl(a.methods);
-  if (a.atlas_aspect > 0 &&
-      std::none_of(methods.begin(), methods.end(), [](const Method& m) {
+  if (a.atlas_aspect > 0 && std::none_of(methods.begin(), methods.end(), [](const Method& m) {
         return m.kind == Kind::ExternalAuto || m.kind == Kind::ExternalFile;
       }))
     bad_option("--atlas-aspect goes with an external atlas (--methods external or external:FILE)");
-  if (!a.sweep.empty() && a.sweep_max_faces <= 0) bad_option("--sweep-max-faces 0 sweeps no mesh; give --sweep none for no sweep");
+  if (!a.sweep.empty() && a.sweep_max_faces <= 0)
+    bad_option("--sweep-max-faces 0 sweeps no mesh; give --sweep none for no sweep");
   {
     // A mistyped --data would otherwise bench the built-in meshes without a word.
     std::error_code ec;
@@ -850,9 +863,10 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
     std::error_code kind;
     if (!fs::is_directory(a.out, kind)) {
       if (fs::exists(a.out, kind))
-        throw isochart::InputError(a.out, "--out takes a directory (for bench.md, bench.csv and the plots); this is a file");
-      throw isochart::InputError(a.out, "cannot create the output directory" +
-                                            (ec ? ": " + ec.message() : std::string()));
+        throw isochart::InputError(
+            a.out, "--out takes a directory (for bench.md, bench.csv and the plots); this is a file");
+      throw isochart::InputError(
+          a.out, "cannot create the output directory" + (ec ? ": " + ec.message() : std::string()));
     }
     const fs::path out(a.out);
     ctx.check_paths(
@@ -872,7 +886,8 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
       }
   for (std::size_t i = 0; i < a.meshes.size(); ++i) bench.run_mesh(a.meshes[i], meshes[i], k, n);
   // A table of n/a rows only is a failed run, not a result; the rows say why.
-  if (std::all_of(bench.rows().begin(), bench.rows().end(), [](const Row& r) { return r.note.rfind("n/a", 0) == 0; })) {
+  if (std::all_of(bench.rows().begin(), bench.rows().end(),
+                  [](const Row& r) { return r.note.rfind("n/a", 0) == 0; })) {
     std::string why = bench.rows().empty() ? std::string("no rows") : bench.rows().front().note.substr(5);
     throw isochart::InputError(a.out, "no method gave a result on any mesh (" + why + ")");
   }
@@ -936,21 +951,21 @@ void run_bench(const Context& ctx, BenchArgs a, const std::string& sweep_text) {
   j["rows"] = nlohmann::json::array();
   for (const Row& r : bench.rows()) {
     auto num = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(); };
-    j["rows"].push_back({{"mesh", r.mesh},
-                         {"faces", r.faces},
-                         {"method", r.method},
-                         {"charts", r.charts},
-                         {"l2", num(r.l2)},
-                         {"linf", num(r.linf)},
-                         {"packing_ratio", num(r.packing)},
-                         {"resolution", {r.width, r.height}},
-                         {"defined_samples", r.defined},
-                         {"unique_samples", r.unique},
-                         {"target_samples", r.target},
-                         {"psnr", num(r.psnr)},
-                         {"seconds",
-                          {{"atlas", r.s_atlas}, {"packing", r.s_pack}, {"mcgim", r.s_mcgim}, {"psnr", r.s_psnr}}},
-                         {"note", r.note}});
+    j["rows"].push_back(
+        {{"mesh", r.mesh},
+         {"faces", r.faces},
+         {"method", r.method},
+         {"charts", r.charts},
+         {"l2", num(r.l2)},
+         {"linf", num(r.linf)},
+         {"packing_ratio", num(r.packing)},
+         {"resolution", {r.width, r.height}},
+         {"defined_samples", r.defined},
+         {"unique_samples", r.unique},
+         {"target_samples", r.target},
+         {"psnr", num(r.psnr)},
+         {"seconds", {{"atlas", r.s_atlas}, {"packing", r.s_pack}, {"mcgim", r.s_mcgim}, {"psnr", r.s_psnr}}},
+         {"note", r.note}});
   }
   // The sweep was only in sweep.csv and bench.md.
   j["sweep"] = nlohmann::json::array();
@@ -979,9 +994,10 @@ void add_bench(CLI::App& app, Context& ctx, Action& action) {
       "bench", "Compare atlas methods on meshes: charts, stretch, packing, MCGIM PSNR at matched samples");
   sub->add_option("meshes", args->meshes,
                   "Meshes (files or builtin:NAME); default: every mesh in DATA/meshes, else the built-ins");
-  sub->add_option("--methods", args->methods,
-                  "Comma-separated: isochart, isomap-nocut, lscm, lscm+stretch, external (DATA/baseline_atlases/"
-                  "MESH_*.obj), external:FILE.obj")
+  sub->add_option(
+         "--methods", args->methods,
+         "Comma-separated: isochart, isomap-nocut, lscm, lscm+stretch, external (DATA/baseline_atlases/"
+         "MESH_*.obj), external:FILE.obj")
       ->capture_default_str();
   sub->add_option(
          "--res", args->res,
@@ -991,7 +1007,8 @@ void add_bench(CLI::App& app, Context& ctx, Action& action) {
                   "Output directory (bench.md, bench.csv, sweep.csv, PNG plots; an earlier run's plots there "
                   "are removed)")
       ->capture_default_str();
-  sub->add_option("--data", args->data, "Shared data directory (meshes/, baseline_atlases/)")->capture_default_str();
+  sub->add_option("--data", args->data, "Shared data directory (meshes/, baseline_atlases/)")
+      ->capture_default_str();
   sub->add_option("--max-l2", args->max_l2, "L2 stretch bound of every method")->capture_default_str();
   sub->add_option("--max-linf", args->max_linf, "Linf stretch bound of every method")->capture_default_str();
   sub->add_option("--atlas-aspect", args->atlas_aspect,

@@ -30,7 +30,7 @@ struct RenderArgs {
   int width = 0;   // 0: 400 per view (1024 for --uv-layout)
   int height = 0;  // 0: 400 (1024 for --uv-layout)
   int supersample = 2;
-  double aspect = 0;  // --uv-layout: texture width / height (0: square)
+  double aspect = 0;     // --uv-layout: texture width / height (0: square)
   std::string up = "y";  // the model's up axis: x, y, z, -x, -y or -z
   bool views_or_up_given = false;
   bool supersample_given = false;
@@ -58,14 +58,16 @@ void run_render(const Context& ctx, const RenderArgs& a) {
   if (a.uv_layout && (!a.texture.empty() || a.wireframe || a.ortho || a.transparent))
     bad_option(
         "--uv-layout draws the atlas itself; it takes no --texture, --wireframe, --ortho or --transparent");
-  if (a.uv_layout && a.views_or_up_given) bad_option("--uv-layout draws texture space; it takes no --views or --up");
+  if (a.uv_layout && a.views_or_up_given)
+    bad_option("--uv-layout draws texture space; it takes no --views or --up");
   if (a.uv_layout && a.supersample_given)
     bad_option("--uv-layout always draws with " + std::to_string(isochart::kUvLayoutSupersample) + "x" +
                std::to_string(isochart::kUvLayoutSupersample) + " supersampling; it takes no --supersample");
   if (a.transparent) {
     std::string ext = a.output.substr(std::min(a.output.size(), a.output.find_last_of('.')));
     for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (ext == ".jpg" || ext == ".jpeg") bad_option("--transparent needs an image with alpha (.png, .exr, .tif), not JPEG");
+    if (ext == ".jpg" || ext == ".jpeg")
+      bad_option("--transparent needs an image with alpha (.png, .exr, .tif), not JPEG");
   }
   if (a.aspect > 0 && !a.uv_layout) bad_option("--aspect goes with --uv-layout");
   double aspect = a.aspect > 0 ? a.aspect : 1.0;
@@ -126,7 +128,7 @@ void run_render(const Context& ctx, const RenderArgs& a) {
     image = for_input([&] { return isochart::render_uv_layout(mesh, width, height, aspect); });
     mode = "uv-layout";
   }
-  std::string own;  // the mesh's own texture drawn: its file, or "embedded"
+  std::string own;           // the mesh's own texture drawn: its file, or "embedded"
   MaterialImages materials;  // or its materials' images, each face its own
   if (!a.uv_layout) {
     isochart::RenderOptions o;
@@ -244,7 +246,8 @@ void add_render(CLI::App& app, Context& ctx, Action& action) {
       ->check(CLI::Range(1, 16384));
   sub->add_option("--height", args->height, "Image height in pixels (default 400; 1024 for --uv-layout)")
       ->check(CLI::Range(1, 16384));
-  sub->add_option("--up", args->up, "The model's up axis, x, y, z, -x, -y or -z (default y; e.g. z for horse.ply)");
+  sub->add_option("--up", args->up,
+                  "The model's up axis, x, y, z, -x, -y or -z (default y; e.g. z for horse.ply)");
   sub->add_flag("--ortho", args->ortho, "Orthographic instead of perspective projection");
   sub->add_flag("--transparent", args->transparent, "Transparent background (RGBA) instead of white");
   sub->add_option("--supersample", args->supersample, "Samples per pixel along each axis (anti-aliasing)")

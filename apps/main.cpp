@@ -16,13 +16,13 @@
 int main(int argc, char** argv) {
   cli::Context ctx;
 
-  CLI::App app{"isocharts: stretch-bounded texture atlases (Iso-charts), multi-chart geometry "
-               "images and surface texture synthesis"};
+  CLI::App app{
+      "isocharts: stretch-bounded texture atlases (Iso-charts), multi-chart geometry "
+      "images and surface texture synthesis"};
   app.set_version_flag("--version", std::string("isocharts ") + ISOCHARTS_VERSION);
   app.require_subcommand(1);
   app.fallthrough();  // global options may follow the subcommand
-  app.add_option("--threads", ctx.opts.threads, "Worker threads (0 = all cores)")
-      ->check(CLI::Range(0, 1024));
+  app.add_option("--threads", ctx.opts.threads, "Worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
   app.add_option("--seed", ctx.opts.seed, "Seed for every random choice (results depend only on it)")
       ->check(cli::seed_value);
   CLI::Option* quiet = app.add_flag("-q,--quiet", ctx.opts.quiet, "No warnings or progress on stderr");

@@ -505,8 +505,8 @@ void weld_equal_positions(RawMesh& raw) {
   // of more than two faces, a face repeated, or faces around the joined vertex that do not form
   // one fan (two cubes sharing a face, an edge or a corner stay two closed cubes, as in OBJ).
   const std::size_t nw = members.size();
-  std::vector<char> bad(nw, 0);  // 1: undo the join, 2: one vertex per fan (3: to be decided)
-  std::unordered_map<int, int> fan_of;           // for 2: input vertex -> its fan's id
+  std::vector<char> bad(nw, 0);         // 1: undo the join, 2: one vertex per fan (3: to be decided)
+  std::unordered_map<int, int> fan_of;  // for 2: input vertex -> its fan's id
   auto joined = [&](int w) { return members[w] > 1; };
   {
     std::unordered_map<std::uint64_t, int> edge_faces;
@@ -517,7 +517,8 @@ void weld_equal_positions(RawMesh& raw) {
       const std::size_t n = poly.size();
       for (std::size_t i = 0; i < n; ++i) {
         const int a = to[poly[i]], b = to[poly[(i + 1) % n]];
-        const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+        const std::uint64_t key =
+            (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
         if (++edge_faces[key] == 3)
           for (int w : {a, b})
             if (joined(w) && bad[w] == 0) bad[w] = 3;  // separated by fans below if it can be
@@ -555,8 +556,10 @@ void weld_equal_positions(RawMesh& raw) {
       for (std::size_t i = 0; i < m; ++i)
         for (int k = 0; k < 2; ++k) {
           // Only through edges of two faces: pieces meeting along an edge are not one fan.
-          const int x = fan[w][i][k], lo = std::min(static_cast<int>(w), x), hi = std::max(static_cast<int>(w), x);
-          if (edge_faces[(static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint32_t>(hi)] > 2) continue;
+          const int x = fan[w][i][k], lo = std::min(static_cast<int>(w), x),
+                    hi = std::max(static_cast<int>(w), x);
+          if (edge_faces[(static_cast<std::uint64_t>(lo) << 32) | static_cast<std::uint32_t>(hi)] > 2)
+            continue;
           const auto [it, inserted] = by_neighbour.emplace(x, i);
           if (!inserted) parent[find(i)] = find(it->second);
         }
@@ -583,7 +586,8 @@ void weld_equal_positions(RawMesh& raw) {
     int* slot = &id[w];
     if (bad[w] == 2) {
       const auto f = fan_of.find(static_cast<int>(v));
-      slot = &fan_id.try_emplace({w, f == fan_of.end() ? -1 - static_cast<int>(v) : f->second}, -1).first->second;
+      slot = &fan_id.try_emplace({w, f == fan_of.end() ? -1 - static_cast<int>(v) : f->second}, -1)
+                  .first->second;
     }
     if (bad[w] == 1 || *slot < 0) {
       final_of[v] = static_cast<int>(positions.size());

@@ -276,7 +276,8 @@ RawMesh read_ply(const std::string& path, std::string_view data, const LoadOptio
   // with byte 10 after a CR-only header is not taken for a line end.
   const std::string_view eol = data.substr(3, 2) == "\r\n" ? "\r\n" : data.substr(3, 1) == "\r" ? "\r" : "\n";
   std::size_t end_header = std::string_view::npos;
-  for (std::size_t at = data.find("end_header"); at != std::string_view::npos; at = data.find("end_header", at + 1))
+  for (std::size_t at = data.find("end_header"); at != std::string_view::npos;
+       at = data.find("end_header", at + 1))
     if (data[at - 1] == '\n' || data[at - 1] == '\r') {
       end_header = at;
       break;

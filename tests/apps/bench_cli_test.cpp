@@ -27,7 +27,8 @@ fs::path fresh_dir(const std::string& name) {
 }
 
 int run_cli(const std::string& args, const fs::path& err) {
-  const std::string cmd = std::string("'") + ISOCHARTS_CLI + "' " + args + " > /dev/null 2> '" + err.string() + "'";
+  const std::string cmd =
+      std::string("'") + ISOCHARTS_CLI + "' " + args + " > /dev/null 2> '" + err.string() + "'";
   const int status = std::system(cmd.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -152,7 +153,8 @@ TEST_CASE("bench: every method lands within 2% of the reference's defined sample
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(out)) names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
-  CHECK(names == std::vector<std::string>{"bench.csv", "bench.md", "psnr.png", "stretch_torus.png", "sweep.csv"});
+  CHECK(names ==
+        std::vector<std::string>{"bench.csv", "bench.md", "psnr.png", "stretch_torus.png", "sweep.csv"});
   for (const char* png : {"psnr.png", "stretch_torus.png"}) {
     const auto size = fs::file_size(out / png);
     CHECK(size > 1000);
@@ -257,7 +259,8 @@ TEST_CASE("bench: an atlas with a flipped triangle says why its stretch is inf",
   CHECK(rows[0].at("note").find("stretch infinite") == std::string::npos);
 }
 
-TEST_CASE("bench: only external methods and no baseline atlas for the mesh: an n/a row saying so", "[bench]") {
+TEST_CASE("bench: only external methods and no baseline atlas for the mesh: an n/a row saying so",
+          "[bench]") {
   const fs::path dir = fresh_dir("no_baseline");
   const fs::path out = dir / "out", err = dir / "stderr.txt";
   fs::create_directories(dir / "data" / "baseline_atlases");
@@ -273,8 +276,9 @@ TEST_CASE("bench: only external methods and no baseline atlas for the mesh: an n
   }
   CHECK(!fs::exists(out / "bench.csv"));
   // With a mesh that has one, the other's row is n/a and says why.
-  REQUIRE(run_cli("atlas builtin:torus -o '" + (dir / "data" / "baseline_atlases" / "torus_x.obj").string() + "'",
-                  err) == 0);
+  REQUIRE(
+      run_cli("atlas builtin:torus -o '" + (dir / "data" / "baseline_atlases" / "torus_x.obj").string() + "'",
+              err) == 0);
   REQUIRE(run_cli("bench builtin:sphere builtin:torus --methods external --data '" + (dir / "data").string() +
                       "' --res 16 --sweep none --no-plots --out '" + out.string() + "'",
                   err) == 0);

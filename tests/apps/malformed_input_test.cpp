@@ -408,11 +408,10 @@ TEST_CASE("an output over an input of the run, or two outputs on one path, are r
   const fs::path err = tmp.path / "err.txt", mesh = tmp.path / "s.obj";
   REQUIRE(run_cli("-q atlas builtin:sphere -o '" + mesh.string() + "'", err) == 0);
   const std::string before = read_bytes(mesh);
-  for (const std::string& args :
-       {"atlas '" + mesh.string() + "' -o '" + mesh.string() + "'",
-        "--report '" + mesh.string() + "' info '" + mesh.string() + "'",
-        "render '" + mesh.string() + "' --uv-layout -o '" + (tmp.path / "l.png").string() + "' --report '" +
-            mesh.string() + "'"}) {
+  for (const std::string& args : {"atlas '" + mesh.string() + "' -o '" + mesh.string() + "'",
+                                  "--report '" + mesh.string() + "' info '" + mesh.string() + "'",
+                                  "render '" + mesh.string() + "' --uv-layout -o '" +
+                                      (tmp.path / "l.png").string() + "' --report '" + mesh.string() + "'"}) {
     CAPTURE(args);
     CHECK(run_cli("-q " + args, err) == 2);
     CHECK_THAT(read_bytes(err), Catch::Equals("isocharts: error: " + mesh.string() +
@@ -433,13 +432,13 @@ TEST_CASE("an output over an input of the run, or two outputs on one path, are r
   CHECK(read_bytes(mesh) == before);
   const fs::path twice = tmp.path / "t.obj";
   CHECK(run_cli("-q atlas builtin:sphere -o '" + twice.string() + "' -o '" + twice.string() + "'", err) == 2);
-  CHECK_THAT(read_bytes(err),
-             Catch::Equals("isocharts: error: " + twice.string() + ": cannot write: given as two outputs of this run\n"));
+  CHECK_THAT(read_bytes(err), Catch::Equals("isocharts: error: " + twice.string() +
+                                            ": cannot write: given as two outputs of this run\n"));
   const std::string other = (tmp.path / "sub" / ".." / "t.obj").string();
   fs::create_directory(tmp.path / "sub");
   CHECK(run_cli("atlas builtin:sphere -o '" + twice.string() + "' --report '" + other + "'", err) == 2);
-  CHECK_THAT(read_bytes(err),
-             Catch::Equals("isocharts: error: " + other + ": cannot write: given as two outputs of this run\n"));
+  CHECK_THAT(read_bytes(err), Catch::Equals("isocharts: error: " + other +
+                                            ": cannot write: given as two outputs of this run\n"));
   fs::remove(tmp.path / "sub");
   CHECK(entries(tmp.path) == std::vector<std::string>{"err.txt", "s.obj"});
 }
@@ -503,19 +502,22 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   const fs::path out = tmp.path / "a.obj";
   auto line = [&] { return read_bytes(err); };
   CHECK(run_cli("--threads 2 bogus x", err) == 2);
-  CHECK_THAT(line(), Catch::Equals("isocharts: error: unknown command 'bogus' (commands: info, stats, render, "
-                                   "atlas, remesh, psnr, synth, bench, sae)\n"));
+  CHECK_THAT(line(),
+             Catch::Equals("isocharts: error: unknown command 'bogus' (commands: info, stats, render, "
+                           "atlas, remesh, psnr, synth, bench, sae)\n"));
   CHECK(run_cli("", err) == 2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: no command given"));
   // A seed that cannot be repeated from what was typed (wrapped or saturated) is refused.
   for (const std::string seed : {"-1", "18446744073709551616", "1e3", "0x10"}) {
     CHECK(run_cli("atlas builtin:sphere -o '" + out.string() + "' --seed " + seed, err) == 2);
     CHECK_THAT(line(), Catch::Equals("isocharts: error: --seed: expected an integer from 0 to "
-                                     "18446744073709551615, got '" + seed + "'\n"));
+                                     "18446744073709551615, got '" +
+                                     seed + "'\n"));
   }
   CHECK(run_cli("synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --scale 0", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --scale: expected a positive number, got '0'\n"));
-  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --levels 64,32,64", err) == 2);
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --levels 64,32,64", err) ==
+        2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --levels: 64 is given twice\n"));
   // Values CLI11 cannot read, or outside a range, in our words (it said "Could not convert:
   // --width = abc" and, for a range, "Value 12x not in range").
@@ -523,7 +525,8 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(run_cli(atlas + " --width abc", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --width: expected an integer, got 'abc'\n"));
   CHECK(run_cli(atlas + " --width 99999999999999", err) == 2);
-  CHECK_THAT(line(), Catch::Equals("isocharts: error: --width: 99999999999999 is out of range for an integer\n"));
+  CHECK_THAT(line(),
+             Catch::Equals("isocharts: error: --width: 99999999999999 is out of range for an integer\n"));
   CHECK(run_cli(atlas + " --max-l2 1.1x", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --max-l2: expected a number, got '1.1x'\n"));
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --res 12x", err) == 2);
@@ -534,7 +537,8 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK_THAT(line(),
              Catch::Equals("isocharts: error: --levels: expected an integer from 4 to 2048, got '3'\n"));
   CHECK(run_cli(atlas + " --png-size 5", err) == 2);
-  CHECK_THAT(line(), Catch::Equals("isocharts: error: --png-size: expected an integer from 16 to 2896, got '5'\n"));
+  CHECK_THAT(line(),
+             Catch::Equals("isocharts: error: --png-size: expected an integer from 16 to 2896, got '5'\n"));
   // Options that would do nothing, and empty values that would skip an output, are refused.
   CHECK(run_cli(atlas + " --png-size 64", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --png-size goes with --png\n"));
@@ -557,7 +561,8 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(run_cli("atlas builtin:sphere -o '" + nodir + "/a.obj'", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: " + nodir + "/a.obj: cannot write: directory " + nodir +
                                    " does not exist\n"));
-  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --report '" + nodir + "/r.json'",
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --report '" + nodir +
+                    "/r.json'",
                 err) == 2);
   CHECK_THAT(line(), Catch::Contains("r.json: cannot write: directory"));
   // A directory no file can be made in, though access() lets root write there: found before
@@ -565,7 +570,9 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(run_cli("render builtin:sphere -o /sys/isocharts_test_view.png", err) == 2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: /sys/isocharts_test_view.png: cannot write"));
   CHECK(run_cli("stats builtin:sphere --aspect 0", err) == 2);
-  CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect: expected a number from 0.00006104 to 16384, got '0'\n"));
+  CHECK_THAT(
+      line(),
+      Catch::Equals("isocharts: error: --aspect: expected a number from 0.00006104 to 16384, got '0'\n"));
   // The bound quoted is inside the range (1/16384 printed as 0.000061 was refused when typed back).
   CHECK(run_cli("stats builtin:sphere --aspect 0.000061", err) == 2);
   {
@@ -582,16 +589,17 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
     CHECK_THAT(read_bytes(help), Catch::Contains("--aspect FLOAT:FLOAT in [0.00006104 - 16384]"));
     fs::remove(help);  // the checks below count what a failing command leaves behind
   }
-  CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --width 4096 --height 4096", err) ==
-        2);
+  CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --width 4096 --height 4096",
+                err) == 2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --width/--height/--supersample: 4096x4096 pixels"));
   // Options that would be ignored are refused.
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.jpg").string() + "' --transparent", err) == 2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: --transparent needs an image with alpha"));
-  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --no-psnr --psnr-samples 5", err) ==
-        2);
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --no-psnr --psnr-samples 5",
+                err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --psnr-samples does nothing with --no-psnr\n"));
-  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --signal-use full", err) == 2);
+  CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --signal-use full", err) ==
+        2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --signal-use goes with --signal\n"));
   CHECK(run_cli("remesh builtin:sphere -o '" + (tmp.path / "r.ply").string() + "' --res 32 --res 64", err) ==
         2);
@@ -609,10 +617,15 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
         2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --atlas-aspect goes with --atlas\n"));
   // Accepted and doing nothing: the layout is always drawn with its charts coloured.
-  CHECK(run_cli("render builtin:sphere --uv-layout --charts -o '" + (tmp.path / "v.png").string() + "'", err) == 2);
-  CHECK_THAT(line(), Catch::Contains("--uv-layout draws the atlas itself, its charts coloured; it takes no --shaded or --charts"));
-  const std::string bench = "bench builtin:sphere --methods isochart --res 16 --sweep none --no-plots --out '" +
-                            (tmp.path / "b").string() + "'";
+  CHECK(run_cli("render builtin:sphere --uv-layout --charts -o '" + (tmp.path / "v.png").string() + "'",
+                err) == 2);
+  CHECK_THAT(
+      line(),
+      Catch::Contains(
+          "--uv-layout draws the atlas itself, its charts coloured; it takes no --shaded or --charts"));
+  const std::string bench =
+      "bench builtin:sphere --methods isochart --res 16 --sweep none --no-plots --out '" +
+      (tmp.path / "b").string() + "'";
   CHECK(run_cli(bench + " --atlas-aspect 2", err) == 2);
   CHECK_THAT(line(), Catch::Contains("--atlas-aspect goes with an external atlas"));
   CHECK(run_cli("bench builtin:sphere --methods isochart --sweep 1.2 --sweep-max-faces 0 --out '" +
@@ -623,7 +636,8 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(run_cli("bench builtin:sphere --methods isochart --res 16 --sweep none --no-plots --out '" +
                     (tmp.path / "no_such" / "b").string() + "'",
                 err) == 2);
-  CHECK_THAT(line(), Catch::Contains("cannot write: directory " + (tmp.path / "no_such").string() + " does not exist"));
+  CHECK_THAT(line(), Catch::Contains("cannot write: directory " + (tmp.path / "no_such").string() +
+                                     " does not exist"));
   CHECK_FALSE(fs::exists(tmp.path / "no_such"));
   CHECK(run_cli("render builtin:sphere -o '" + (tmp.path / "v.png").string() + "' --aspect 2", err) == 2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --aspect goes with --uv-layout\n"));
@@ -646,7 +660,8 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
              Catch::StartsWith("isocharts: error: --width/--height/--supersample: 4096x4096 pixels at "
                                "supersample 2 is too large"));
   // An even neighbourhood is refused before any work.
-  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --neighborhood 4", err) == 2);
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --neighborhood 4", err) ==
+        2);
   CHECK_THAT(line(), Catch::Equals("isocharts: error: --neighborhood must be odd (3, 5, 7, ...), not 4\n"));
   // A scale that would magnify the exemplar past the finest level's whole image used to run
   // out of memory (--scale 1: 15 GB); it is refused with the smallest scale that works.
@@ -679,15 +694,17 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   const auto at = large.find("the largest scale is ");
   REQUIRE(at != std::string::npos);
   const std::string largest = large.substr(at + 21, large.find(' ', at + 21) - at - 21);
-  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --scale " + largest,
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --scale " +
+                    largest,
                 err) == 0);
   // An exemplar too large to search at the scale asked for: the error names it and the option.
   const fs::path big = tmp.path / "big.png";
   isochart::Image noise_image(1100, 1100, 3);
-  for (std::size_t i = 0; i < noise_image.pixels.size(); ++i) noise_image.pixels[i] = float((i * 7919) % 256) / 255;
+  for (std::size_t i = 0; i < noise_image.pixels.size(); ++i)
+    noise_image.pixels[i] = float((i * 7919) % 256) / 255;
   isochart::write_image(big.string(), noise_image);
-  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() + "' --levels 64,32 --exemplar '" +
-                    big.string() + "' --pixels-per-texel 1",
+  CHECK(run_cli("-q synth builtin:sphere -o '" + (tmp.path / "s.glb").string() +
+                    "' --levels 64,32 --exemplar '" + big.string() + "' --pixels-per-texel 1",
                 err) == 2);
   CHECK_THAT(line(), Catch::StartsWith("isocharts: error: " + big.string() +
                                        ": --pixels-per-texel 1: exemplar too large at this scale"));
@@ -695,7 +712,8 @@ TEST_CASE("bad commands and options get one line naming what is wrong", "[cli]")
   CHECK(run_cli("-q info builtin:sphere --seed 18446744073709551615", err) == 0);
 }
 
-TEST_CASE("a write that fails midway (file size limit, as on a full disk) is one line, nothing left", "[cli]") {
+TEST_CASE("a write that fails midway (file size limit, as on a full disk) is one line, nothing left",
+          "[cli]") {
   TempDir tmp("fsize");
   const fs::path err = tmp.path / "err.txt";
   const fs::path outdir = tmp.path / "out";
@@ -705,10 +723,11 @@ TEST_CASE("a write that fails midway (file size limit, as on a full disk) is one
   for (const std::string ext : {"png", "jpg", "exr", "tif"}) {
     const fs::path out = outdir / ("view." + ext);
     CAPTURE(ext);
-    const int status = std::system(("sh -c \"trap '' XFSZ; ulimit -f 16; exec '" + std::string(ISOCHARTS_CLI) +
-                                    "' render builtin:creature -o '" + out.string() +
-                                    "' --width 800 --height 800 -q\" > /dev/null 2> '" + err.string() + "'")
-                                       .c_str());
+    const int status =
+        std::system(("sh -c \"trap '' XFSZ; ulimit -f 16; exec '" + std::string(ISOCHARTS_CLI) +
+                     "' render builtin:creature -o '" + out.string() +
+                     "' --width 800 --height 800 -q\" > /dev/null 2> '" + err.string() + "'")
+                        .c_str());
     REQUIRE(WIFEXITED(status));
     CHECK(WEXITSTATUS(status) == 1);
     const std::string line = read_bytes(err);
@@ -721,13 +740,14 @@ TEST_CASE("a write that fails midway (file size limit, as on a full disk) is one
   for (const std::string ext : {"obj", "ply", "glb"}) {
     const fs::path out = outdir / ("sphere." + ext);
     CAPTURE(ext);
-    const int status = std::system(("sh -c \"trap '' XFSZ; ulimit -f 16; exec '" + std::string(ISOCHARTS_CLI) +
-                                    "' -q atlas builtin:sphere -o '" + out.string() + "'\" > /dev/null 2> '" +
-                                    err.string() + "'")
+    const int status = std::system(("sh -c \"trap '' XFSZ; ulimit -f 16; exec '" +
+                                    std::string(ISOCHARTS_CLI) + "' -q atlas builtin:sphere -o '" +
+                                    out.string() + "'\" > /dev/null 2> '" + err.string() + "'")
                                        .c_str());
     REQUIRE(WIFEXITED(status));
     CHECK(WEXITSTATUS(status) == 1);
-    CHECK_THAT(read_bytes(err), Catch::Equals("isocharts: error: " + out.string() + ": cannot write: File too large\n"));
+    CHECK_THAT(read_bytes(err),
+               Catch::Equals("isocharts: error: " + out.string() + ": cannot write: File too large\n"));
     CHECK(entries(outdir).empty());
   }
 }
@@ -741,7 +761,8 @@ TEST_CASE("a PNG cut short gets our one-line error instead of libpng's", "[cli]"
   write_bytes(cut, whole.substr(0, whole.size() / 2));
   const fs::path tri = tmp.path / "tri.obj";
   write_bytes(tri, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n");
-  CHECK(run_cli("render '" + tri.string() + "' --texture '" + cut.string() + "' -o '" + (tmp.path / "w.png").string() + "'",
+  CHECK(run_cli("render '" + tri.string() + "' --texture '" + cut.string() + "' -o '" +
+                    (tmp.path / "w.png").string() + "'",
                 err) == 2);
   const std::string text = read_bytes(err);
   CHECK_THAT(text, Catch::StartsWith("isocharts: error: " + cut.string()) && Catch::Contains("cut short"));
@@ -750,7 +771,8 @@ TEST_CASE("a PNG cut short gets our one-line error instead of libpng's", "[cli]"
   // Bytes after the end marker (some writers pad or append) are no reason to refuse it.
   const fs::path padded = tmp.path / "padded.png";
   write_bytes(padded, whole + std::string(100, '\0'));
-  CHECK(run_cli("render '" + tri.string() + "' --texture '" + padded.string() + "' -o '" + (tmp.path / "w.png").string() + "'",
+  CHECK(run_cli("render '" + tri.string() + "' --texture '" + padded.string() + "' -o '" +
+                    (tmp.path / "w.png").string() + "'",
                 err) == 0);
 }
 
@@ -772,7 +794,8 @@ TEST_CASE("remesh --atlas warns about an atlas whose charts overlap in UV", "[cl
     }
   }
   write_bytes(tiled, out.str());
-  const std::string remesh = "remesh builtin:sphere --res 32 -o '" + (tmp.path / "r.ply").string() + "' --no-psnr";
+  const std::string remesh =
+      "remesh builtin:sphere --res 32 -o '" + (tmp.path / "r.ply").string() + "' --no-psnr";
   REQUIRE(run_cli(remesh + " --atlas '" + atlas.string() + "'", err) == 0);
   CHECK(read_bytes(err).find("overlapping") == std::string::npos);
   REQUIRE(run_cli(remesh + " --atlas '" + tiled.string() + "'", err) == 0);
@@ -862,10 +885,12 @@ TEST_CASE("a long thin chart in a square texture gets a warning naming the remed
   }
   write_bytes(strip, obj);
   CHECK(run_cli("atlas '" + strip.string() + "' -o '" + (tmp.path / "a.obj").string() + "'", err) == 0);
-  CHECK_THAT(read_bytes(err), Catch::Contains("strip.obj: the charts fill") &&
-                                  Catch::Contains("the largest is about 10") &&  // 100-odd, with the gutter
-                                  Catch::Contains("times longer than wide; a texture of its shape (--width/--height)"));
-  CHECK(run_cli("atlas '" + strip.string() + "' -o '" + (tmp.path / "b.obj").string() + "' --width 4096 --height 40",
+  CHECK_THAT(read_bytes(err),
+             Catch::Contains("strip.obj: the charts fill") &&
+                 Catch::Contains("the largest is about 10") &&  // 100-odd, with the gutter
+                 Catch::Contains("times longer than wide; a texture of its shape (--width/--height)"));
+  CHECK(run_cli("atlas '" + strip.string() + "' -o '" + (tmp.path / "b.obj").string() +
+                    "' --width 4096 --height 40",
                 err) == 0);
   CHECK(read_bytes(err).empty());
 }
@@ -1481,8 +1506,8 @@ TEST_CASE("directories, '-' and image prefixes with an extension are named for w
   }
   CHECK(!fs::exists(tmp.path / "_32x32.exr"));
   // A prefix with another type's extension wrote e.png_32x32.exr.
-  CHECK(run_cli("-q remesh builtin:sphere --res 32 --no-psnr -o '" + (tmp.path / "r2.ply").string() + "' --exr '" +
-                    (tmp.path / "e.png").string() + "'",
+  CHECK(run_cli("-q remesh builtin:sphere --res 32 --no-psnr -o '" + (tmp.path / "r2.ply").string() +
+                    "' --exr '" + (tmp.path / "e.png").string() + "'",
                 err) == 2);
   CHECK_THAT(read_bytes(err), Catch::Contains("the prefix ends in .png"));
   CHECK(!fs::exists(tmp.path / "r2.ply"));

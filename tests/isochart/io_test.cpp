@@ -279,13 +279,15 @@ TEST_CASE("text formats: a byte-order mark and lone CR line ends are read like p
   REQUIRE(obj.polygons.size() == 1);
   CHECK(obj.polygons[0] == std::vector<int>{0, 1, 2});
   CHECK_THAT(load_error(d.write("bad.obj", "v 0 0 0\rv 1 0 0\r\nv 0 x 0\n")), Catch::Contains("line 3"));
-  const RawMesh off = read_raw_mesh(d.write("m.off", "\xEF\xBB\xBFOFF\r3 1 0\r0 0 0\r1 0 0\r0 1 0\r3 0 1 2\r"));
+  const RawMesh off =
+      read_raw_mesh(d.write("m.off", "\xEF\xBB\xBFOFF\r3 1 0\r0 0 0\r1 0 0\r0 1 0\r3 0 1 2\r"));
   CHECK(off.positions.size() == 3);
   CHECK(off.polygons.size() == 1);
   // PLY: a BOM, and a CR-only header before a binary body whose first byte is 10 (LF).
-  const std::string header = "ply\rformat binary_little_endian 1.0\relement vertex 3\rproperty float x\r"
-                             "property float y\rproperty float z\relement face 1\r"
-                             "property list uchar int vertex_indices\rend_header\r";
+  const std::string header =
+      "ply\rformat binary_little_endian 1.0\relement vertex 3\rproperty float x\r"
+      "property float y\rproperty float z\relement face 1\r"
+      "property list uchar int vertex_indices\rend_header\r";
   std::string body;
   auto put = [&](const void* p, std::size_t n) { body.append(static_cast<const char*>(p), n); };
   const float xyz[9] = {1.4e-44f /* bytes 0a 00 00 00 */, 0, 0, 1, 0, 0, 0, 1, 0};
@@ -558,10 +560,13 @@ TEST_CASE("PLY: an ASCII line with more values than the header declares is refus
       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
       "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
   CHECK(read_raw_mesh(d.write("ok.ply", head + "0 0 0\n1 0 0 \t\n0 1 0\n3 0 1 2\n")).polygons.size() == 1);
-  CHECK_THAT(load_error(d.write("v.ply", head + "0 0 0 7\n1 0 0\n0 1 0\n3 0 1 2\n")),
-             Catch::Contains("line 10: vertex 0: more values on this line than the header declares ('7' is one too many)"));
+  CHECK_THAT(
+      load_error(d.write("v.ply", head + "0 0 0 7\n1 0 0\n0 1 0\n3 0 1 2\n")),
+      Catch::Contains(
+          "line 10: vertex 0: more values on this line than the header declares ('7' is one too many)"));
   CHECK_THAT(load_error(d.write("f.ply", head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 3\n")),
-             Catch::Contains("line 13: face 0: more values on this line than the header declares ('3' is one too many)"));
+             Catch::Contains(
+                 "line 13: face 0: more values on this line than the header declares ('3' is one too many)"));
 }
 
 TEST_CASE("PLY: face colours are named as not read", "[io]") {
@@ -618,7 +623,8 @@ TEST_CASE("PLY: errors name the line or the element", "[io]") {
   // What a binary file of the same header could not hold, an ASCII one may not either.
   CHECK(load_error(d.write("u300.ply", edited("float x", "uchar x") + "0 0 0\n300 0 0\n0 1 0\n3 0 1 2\n")) ==
         "line 11: vertex 1: '300' is not a uchar value, as the header declares");
-  CHECK(load_error(d.write("i300.ply", edited("uchar int", "uchar uchar") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 300\n")) ==
+  CHECK(load_error(
+            d.write("i300.ply", edited("uchar int", "uchar uchar") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 300\n")) ==
         "line 13: face 0: vertex index 300 is not a uchar value, as the header declares");
   // Declarations made twice, and a PLY version other than 1.0.
   CHECK(load_error(d.write("dupx.ply", edited("property float y", "property float x") + triangle)) ==
@@ -722,18 +728,21 @@ std::string glb_of(const GltfSample& s) {
 
 }  // namespace
 
-TEST_CASE("glTF: triangles from a count that is not a multiple of 3, and a short data: URI, are said", "[io]") {
+TEST_CASE("glTF: triangles from a count that is not a multiple of 3, and a short data: URI, are said",
+          "[io]") {
   TempDir d;
   const GltfSample s = gltf_sample();
   // Mesh 0's first primitive: 6 indices; 5 of them, or its 4 vertices without indices.
   nlohmann::json doc = s.doc;
   doc["accessors"][3]["count"] = 5;
   GltfSample cut{s.bin, doc};
-  CHECK_THAT(load_error(d.write("i.gltf", gltf_text(cut))), Catch::Contains("triangles from 5 indices, not a multiple of 3"));
+  CHECK_THAT(load_error(d.write("i.gltf", gltf_text(cut))),
+             Catch::Contains("triangles from 5 indices, not a multiple of 3"));
   doc = s.doc;
   doc["meshes"][0]["primitives"][0].erase("indices");
   GltfSample noidx{s.bin, doc};
-  CHECK_THAT(load_error(d.write("n.gltf", gltf_text(noidx))), Catch::Contains("triangles from 4 vertices, not a multiple of 3"));
+  CHECK_THAT(load_error(d.write("n.gltf", gltf_text(noidx))),
+             Catch::Contains("triangles from 4 vertices, not a multiple of 3"));
   // byteLength beyond the data: tinygltf's message quoted the whole base64 text.
   nlohmann::json big = nlohmann::json::parse(gltf_text(s));
   big["buffers"][0]["byteLength"] = s.bin.size() + 1000;
@@ -779,7 +788,8 @@ TEST_CASE("glTF: primitives, modes, index types and transforms", "[io]") {
   fs::remove(d.file("s.bin"));
   CHECK_THAT(load_error(d.file("external.gltf")), Catch::StartsWith("invalid glTF"));
   fs::create_directory(d.file("s.bin"));  // tinygltf's own reader threw bad_alloc on this
-  CHECK_THAT(load_error(d.file("external.gltf")), Catch::StartsWith("invalid glTF") && Catch::Contains("is a directory"));
+  CHECK_THAT(load_error(d.file("external.gltf")),
+             Catch::StartsWith("invalid glTF") && Catch::Contains("is a directory"));
   // tinygltf's check that the file exists opened it, and waited forever on a FIFO.
   fs::remove(d.file("s.bin"));
   REQUIRE(::mkfifo(d.file("s.bin").c_str(), 0600) == 0);
@@ -1170,7 +1180,8 @@ TEST_CASE("glb: separate pieces touching at a face, an edge or a corner are not 
     for (int f = 0; f < cube.num_faces(); ++f) {
       two.faces.push_back({cube.faces[f][0] + nv, cube.faces[f][1] + nv, cube.faces[f][2] + nv});
       if (cube.has_uvs())
-        two.face_uvs.push_back({cube.face_uvs[f][0] + nt, cube.face_uvs[f][1] + nt, cube.face_uvs[f][2] + nt});
+        two.face_uvs.push_back(
+            {cube.face_uvs[f][0] + nt, cube.face_uvs[f][1] + nt, cube.face_uvs[f][2] + nt});
       two.face_groups.push_back(cube.face_groups[f] + 6);
     }
     save_mesh(two, d.file("two.glb"));
