@@ -75,6 +75,11 @@ void Context::check_paths(const std::vector<std::string>& inputs, std::vector<st
     }
     // Outputs are written to a temporary file and renamed, never into a device or a pipe
     // (/dev/null, /dev/stdout): refused now rather than after the work.
+    // A read-only file is not replaced by the rename (which the directory allows) behind the
+    // user's back, as a shell's `>` would not write it either.
+    if (::stat(out.c_str(), &st) == 0 && S_ISREG(st.st_mode) && ::access(out.c_str(), W_OK) != 0)
+      throw isochart::InputError(
+          out, "cannot write: the file is read-only (" + std::string(std::strerror(errno)) + ")");
     if (::stat(out.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
       throw isochart::InputError(out, S_ISDIR(st.st_mode) ? "cannot write: is a directory"
                                                           : "cannot write: not a regular file (outputs are "
@@ -121,18 +126,17 @@ isochart::Progress Context::progress() const {
     if (now - state->start < std::chrono::seconds(1)) return true;
     const int s = static_cast<int>(stage);
     if (state->tty) {
-      if (s == state->last_stage && now - state->last_print < std::chrono::milliseconds(100))
-        return true;
+      if (s == state->last_stage && now - state->last_print < std::chrono::milliseconds(100)) return true;
       std::fprintf(stderr, "\r\033[K[%6.1fs] %-15s %3.0f%%",
-                   std::chrono::duration<double>(now - state->start).count(),
-                   isochart::stage_name(stage), 100.0 * fraction);
+                   std::chrono::duration<double>(now - state->start).count(), isochart::stage_name(stage),
+                   100.0 * fraction);
       std::fflush(stderr);
       state->shown = true;
     } else {
       // Not a terminal: a line when the stage changes, at most one every five seconds (a bench
       // run alternates stages hundreds of times and filled logs with them).
-      if (s == state->last_stage || (state->last_print != clock::time_point{} &&
-                                     now - state->last_print < std::chrono::seconds(5)))
+      if (s == state->last_stage ||
+          (state->last_print != clock::time_point{} && now - state->last_print < std::chrono::seconds(5)))
         return true;
       std::fprintf(stderr, "[%6.1fs] %s\n", std::chrono::duration<double>(now - state->start).count(),
                    isochart::stage_name(stage));
@@ -196,7 +200,9 @@ void Context::emit(const nlohmann::json& given, const std::string& text) const {
   }
 }
 
-void bad_option(const std::string& message) { throw isochart::InputError("", message); }
+void bad_option(const std::string& message) {
+  throw isochart::InputError("", message);
+}
 
 isochart::MeshFormat output_mesh_format(const std::string& path,
                                         const std::vector<isochart::MeshFormat>& allowed,
@@ -206,14 +212,14 @@ isochart::MeshFormat output_mesh_format(const std::string& path,
   std::error_code ec;  // a name too long to look up is refused by check_paths, with a message
   if (std::filesystem::is_directory(path, ec))
     throw isochart::InputError(path, "cannot write: is a directory");
-  if (ext.empty()) throw isochart::InputError(path, "has no file extension (this command writes " + writes + ")");
+  if (ext.empty())
+    throw isochart::InputError(path, "has no file extension (this command writes " + writes + ")");
   try {
     const isochart::MeshFormat f = isochart::format_from_path(path);
     if (std::find(allowed.begin(), allowed.end(), f) != allowed.end()) return f;
   } catch (const isochart::InputError&) {
   }
-  throw isochart::InputError(
-      path, "cannot write '" + ext + "' files (this command writes " + writes + ")");
+  throw isochart::InputError(path, "cannot write '" + ext + "' files (this command writes " + writes + ")");
 }
 
 namespace {

@@ -483,7 +483,8 @@ std::string output_target(const std::string& path) {
   // Renaming over a device or a directory would replace it (as root, /dev/full became a file).
   struct stat st;
   if (::stat(p.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
-    throw InputError(path, S_ISDIR(st.st_mode) ? "cannot write: is a directory" : "cannot write: not a regular file");
+    throw InputError(
+        path, S_ISDIR(st.st_mode) ? "cannot write: is a directory" : "cannot write: not a regular file");
   if (::stat(p.c_str(), &st) == 0) {
     // Replacing a file this run read would destroy the input (`atlas a.obj -o a.obj`, a
     // report over its mesh); refused before anything is written.
@@ -560,6 +561,15 @@ std::string temporary_path(const std::string& target, const std::string& ext) {
   return (t.parent_path() / (base + tag + ext)).string();
 }
 
+namespace {
+// A file replaced by renaming a new one over it would take the new file's mode (0644 where
+// it was 0444 or 0600): the replacement gets the old file's permission bits.
+void keep_mode(const std::string& tmp, const std::string& target) {
+  struct stat st;
+  if (::stat(target.c_str(), &st) == 0 && S_ISREG(st.st_mode)) ::chmod(tmp.c_str(), st.st_mode & 07777);
+}
+}  // namespace
+
 void write_file_atomic(const std::string& path, const std::string& data) {
   const std::string target = output_target(path);
   const std::string tmp = temporary_path(target);
@@ -577,6 +587,7 @@ void write_file_atomic(const std::string& path, const std::string& data) {
     err = errno;
   }
   if (ok && OutputBatch::stage(tmp, target)) return;
+  if (ok) keep_mode(tmp, target);
   if (ok && std::rename(tmp.c_str(), target.c_str()) != 0) {
     ok = false;
     err = errno;
@@ -660,6 +671,7 @@ void OutputBatch::commit() {
   }
   for (std::size_t i = 0; i < staged_.size(); ++i) {
     const auto& [tmp, target] = staged_[i];
+    keep_mode(tmp, target);
     if (std::rename(tmp.c_str(), target.c_str()) != 0) {
       const int err = errno;
       const std::string failed = target;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -645,6 +646,34 @@ bool parse_gltf(tinygltf::TinyGLTF& loader, const std::string& path, std::string
 }
 }  // namespace
 
+namespace {
+
+// tinygltf reads a texCoord that is not a 32-bit integer (1.5, "1", 4294967296) as 0 or
+// truncated, and the texture was then read through TEXCOORD_0 without a word. The key names
+// nothing else in glTF, so its values are checked in the JSON text itself.
+void check_tex_coords(const std::string& path, std::string_view json) {
+  const std::string_view key = "\"texCoord\"";
+  for (std::size_t at = json.find(key); at != std::string_view::npos; at = json.find(key, at + key.size())) {
+    std::size_t i = at + key.size();
+    while (i < json.size() && std::isspace(static_cast<unsigned char>(json[i]))) ++i;
+    if (i >= json.size() || json[i] != ':') continue;  // the word inside a string
+    ++i;
+    while (i < json.size() && std::isspace(static_cast<unsigned char>(json[i]))) ++i;
+    std::size_t end = i;
+    while (end < json.size() && json[end] != ',' && json[end] != '}' && json[end] != ']' &&
+           !std::isspace(static_cast<unsigned char>(json[end])))
+      ++end;
+    const std::string_view tok = json.substr(i, end - i);
+    const bool digits =
+        !tok.empty() && tok.size() <= 10 && tok.find_first_not_of("0123456789") == std::string_view::npos;
+    if (digits && std::stoll(std::string(tok)) <= INT_MAX) continue;
+    throw InputError(path, "a texture's texCoord " + quoted(std::string(tok.substr(0, 40))) +
+                               " is not a texture coordinate set (a whole number from 0)");
+  }
+}
+
+}  // namespace
+
 RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, const LoadOptions& options) {
   if (data.size() > 0xffffffffu) throw InputError(path, "glTF file is larger than 4 GiB");
   tinygltf::TinyGLTF loader;
@@ -669,6 +698,14 @@ RawMesh read_gltf(const std::string& path, std::string_view data, bool binary, c
     if (version != 2)
       throw InputError(path,
                        "glb container version " + std::to_string(version) + " is not supported (only 2)");
+  }
+  if (binary) {
+    // The JSON chunk: its length in bytes 12–15, its text from byte 20 (checked by tinygltf).
+    std::uint32_t length = 0;
+    for (int i = 3; i >= 0; --i) length = length << 8 | static_cast<unsigned char>(data[12 + i]);
+    check_tex_coords(path, data.substr(20, length));
+  } else {
+    check_tex_coords(path, data);
   }
   return GltfReader(path, model, options).read();
 }

@@ -863,6 +863,14 @@ TEST_CASE("glTF and OBJ: a texture named but unusable is said, by file or by rea
   doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"texCoord", 1}}}}}}};
   CHECK(find_mesh_texture(d.write("tc1.gltf", doc.dump())).problem ==
         "its base-colour texture is mapped through TEXCOORD_1, and only TEXCOORD_0 is read");
+  // Values tinygltf would read as 0 (or truncate to 0) are refused at load.
+  for (const auto& [value, shown] : std::vector<std::pair<nlohmann::json, std::string>>{
+           {4294967296LL, "'4294967296'"}, {1.5, "'1.5'"}, {"1", "'\"1\"'"}, {-1, "'-1'"}}) {
+    nlohmann::json bad = doc;
+    bad["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = value;
+    CHECK(load_error(d.write("tcbad.gltf", bad.dump())) ==
+          "a texture's texCoord " + shown + " is not a texture coordinate set (a whole number from 0)");
+  }
   // KHR_texture_transform is read, in the mesh's coordinates (v up; glTF's v runs down). The
   // extension's own example picks the lower left quadrant of the image, turned: the mesh's
   // corner (0, 0) (glTF (0, 1)) reads the image at glTF (0.5, 1), ours (0.5, 0).
@@ -1242,6 +1250,19 @@ TEST_CASE("writes are atomic and leave nothing behind on failure", "[io]") {
   write_file_atomic(d.file("x.txt"), "new");
   CHECK(read_bytes(d.file("x.txt")) == "new");
   CHECK(d.entries() == std::vector<std::string>{"taken.ply", "x.txt"});
+  // The replacement keeps the replaced file's permissions (it became 0644), alone or in a batch.
+  fs::permissions(d.file("x.txt"), fs::perms::owner_read | fs::perms::owner_write);
+  write_file_atomic(d.file("x.txt"), "newer");
+  CHECK(fs::status(d.file("x.txt")).permissions() == (fs::perms::owner_read | fs::perms::owner_write));
+  fs::permissions(d.file("x.txt"), fs::perms::owner_read | fs::perms::group_read);
+  {
+    OutputBatch batch;
+    write_file_atomic(d.file("x.txt"), "newest");
+    batch.commit();
+  }
+  CHECK(read_bytes(d.file("x.txt")) == "newest");
+  CHECK(fs::status(d.file("x.txt")).permissions() == (fs::perms::owner_read | fs::perms::group_read));
+  fs::permissions(d.file("x.txt"), fs::perms::owner_read | fs::perms::owner_write);
 }
 
 TEST_CASE("an output batch lands all its files together or none", "[io]") {
